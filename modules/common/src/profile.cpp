@@ -1,0 +1,398 @@
+#include <carenav/common/profile.h>
+#include <carenav/common/robot.h>
+
+#include <mrpt/config/CConfigFileMemory.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace carenav {
+
+// ---------------------------------------------------------------- schemas
+
+bool SectionSchema::matchesName(const std::string& section) const {
+  if (name.size() >= 2 && name.compare(name.size() - 2, 2, ".*") == 0) {
+    const std::string prefix = name.substr(0, name.size() - 1);  // keeps the dot
+    return section.size() > prefix.size() && section.compare(0, prefix.size(), prefix) == 0;
+  }
+  return section == name;
+}
+
+ProfileSchemas::ProfileSchemas() = default;
+
+ProfileSchemas& ProfileSchemas::instance() {
+  static ProfileSchemas* inst = [] {
+    auto* p = new ProfileSchemas();
+    return p;
+  }();
+  static bool common_done = false;
+  if (!common_done) {
+    common_done = true;
+    registerCommonSections();
+  }
+  return *inst;
+}
+
+void ProfileSchemas::add(SectionSchema s) {
+  for (auto& existing : schemas_)
+    if (existing.name == s.name && existing.variant_value == s.variant_value) {
+      existing = std::move(s);  // re-registration replaces
+      return;
+    }
+  schemas_.push_back(std::move(s));
+}
+
+std::vector<const SectionSchema*> ProfileSchemas::candidates(const std::string& section) const {
+  std::vector<const SectionSchema*> out;
+  for (const auto& s : schemas_)
+    if (s.matchesName(section)) out.push_back(&s);
+  return out;
+}
+
+// ---------------------------------------------------------------- issues
+
+std::string ValueOrigin::where() const {
+  if (line > 0) return file + ":" + std::to_string(line);
+  return file;
+}
+
+std::string ProfileIssue::text() const {
+  std::string s = origin.where() + ": [" + section + "]";
+  if (!key.empty()) s += " " + key;
+  return s + ": " + message;
+}
+
+size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1])});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+// ---------------------------------------------------------------- parsing
+
+namespace {
+
+bool validName(const std::string& s) {
+  if (s.empty()) return false;
+  return std::all_of(s.begin(), s.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '_' || c == '.' || c == '-';
+  });
+}
+
+std::string stripInlineComment(const std::string& v) {
+  for (size_t i = 1; i < v.size(); ++i)
+    if ((v[i] == ';' || v[i] == '#') && (v[i - 1] == ' ' || v[i - 1] == '\t'))
+      return v.substr(0, i);
+  return v;
+}
+
+std::string readFileOrThrow(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path + ": profile not found (no such file)");
+  if (fs::is_directory(path, ec)) throw InputError(path + ": is a directory, not a profile");
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(path + ": cannot open the profile for reading");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+void setEntry(Profile::Section& sec, const std::string& key, Profile::Entry e) {
+  for (auto& [k, v] : sec)
+    if (k == key) {
+      v = std::move(e);
+      return;
+    }
+  sec.emplace_back(key, std::move(e));
+}
+
+}  // namespace
+
+void Profile::parseInto(Profile& p, const std::string& text, const std::string& file,
+                        std::vector<std::string>& chain) {
+  std::map<std::string, Section> own;
+  std::vector<std::string> order;
+  std::string current;
+  bool have_section = false;
+  std::istringstream is(text);
+  std::string raw;
+  int lineno = 0;
+  auto fail = [&](const std::string& msg) {
+    throw InputError(file + ":" + std::to_string(lineno) + ": " + msg);
+  };
+  while (std::getline(is, raw)) {
+    ++lineno;
+    if (lineno == 1 && raw.compare(0, 3, "\xEF\xBB\xBF") == 0) raw.erase(0, 3);  // UTF-8 BOM
+    if (raw.find('\0') != std::string::npos) fail("not a text file (NUL byte)");
+    const std::string line = trim(raw);
+    if (line.empty() || line[0] == ';' || line[0] == '#') continue;
+    if (line[0] == '[') {
+      const auto close = line.find(']');
+      if (close == std::string::npos) fail("section header without closing ']': " + line);
+      const std::string rest = trim(stripInlineComment(" " + line.substr(close + 1)));
+      if (!rest.empty()) fail("unexpected text after the section header: " + rest);
+      current = trim(line.substr(1, close - 1));
+      if (!validName(current))
+        fail("bad section name '" + current + "' (letters, digits, '_', '.', '-')");
+      if (!own.count(current)) order.push_back(current);
+      own[current];
+      have_section = true;
+      continue;
+    }
+    const auto eq = line.find('=');
+    if (eq == std::string::npos) fail("expected 'key = value' or '[section]', got: " + line);
+    if (!have_section) fail("'key = value' before any [section]");
+    const std::string key = trim(line.substr(0, eq));
+    if (!validName(key)) fail("bad key name '" + key + "'");
+    std::string value = trim(stripInlineComment(line.substr(eq + 1)));
+    if (value.size() >= 2 && value.front() == '"' && value.back() == '"')
+      value = value.substr(1, value.size() - 2);
+    auto& sec = own[current];
+    for (const auto& [k, e] : sec)
+      if (k == key)
+        fail("[" + current + "] " + key + " is set twice (first at line " +
+             std::to_string(e.origin.line) + ")");
+    sec.emplace_back(key, Entry{value, ValueOrigin{file, lineno}});
+  }
+  if (own.empty()) throw InputError(file + ": empty profile: no [section] in it");
+
+  // Base first, then this file over it.
+  auto pit = own.find("profile");
+  if (pit != own.end()) {
+    for (const auto& [k, e] : pit->second) {
+      if (k != "base" || e.value.empty()) continue;
+      const fs::path base = fs::path(file).parent_path() / e.value;
+      const std::string bs = base.lexically_normal().string();
+      if (std::find(chain.begin(), chain.end(), bs) != chain.end())
+        throw InputError(e.origin.where() + ": [profile] base: '" + bs +
+                         "' is already being read (circular base chain)");
+      chain.push_back(bs);
+      std::string btext;
+      try {
+        btext = readFileOrThrow(bs);
+      } catch (const InputError& err) {
+        throw InputError(e.origin.where() + ": [profile] base: " + err.what());
+      }
+      parseInto(p, btext, bs, chain);
+    }
+  }
+  p.files_.push_back(file);
+  for (const auto& name : order)
+    for (auto& [k, e] : own[name]) {
+      if (name == "profile" && k == "base") continue;  // consumed above
+      setEntry(p.sections_[name], k, e);
+    }
+}
+
+Profile Profile::load(const std::string& path) {
+  Profile p;
+  p.origin_ = path;
+  std::vector<std::string> chain{fs::path(path).lexically_normal().string()};
+  parseInto(p, readFileOrThrow(path), path, chain);
+  return p;
+}
+
+Profile Profile::fromText(const std::string& text, const std::string& origin_name) {
+  Profile p;
+  p.origin_ = origin_name;
+  std::vector<std::string> chain{origin_name};
+  parseInto(p, text, origin_name, chain);
+  return p;
+}
+
+void Profile::applyOverride(const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  const std::string lhs = eq == std::string::npos ? "" : trim(assignment.substr(0, eq));
+  const auto dot = lhs.rfind('.');
+  if (eq == std::string::npos || dot == std::string::npos || dot == 0 || dot + 1 == lhs.size())
+    throw InputError("--set '" + assignment +
+                     "': expected section.key=value (e.g. robot.v_max=0.2)");
+  const std::string section = lhs.substr(0, dot), key = lhs.substr(dot + 1);
+  if (!validName(section) || !validName(key))
+    throw InputError("--set '" + assignment + "': bad section or key name");
+  setEntry(sections_[section], key,
+           Entry{trim(assignment.substr(eq + 1)), ValueOrigin{"--set", 0}});
+}
+
+void Profile::applyOverrides(const std::vector<std::string>& assignments) {
+  for (const auto& a : assignments) applyOverride(a);
+}
+
+// ---------------------------------------------------------------- checks
+
+ProfileIssue Profile::issueFor(const std::string& section, const std::string& key, const Entry& e,
+                               const std::string& message, const ParamSpec* spec) const {
+  ProfileIssue is;
+  is.origin = e.origin;
+  is.section = section;
+  is.key = key;
+  is.message = "'" + e.value + "': " + message;
+  if (spec) is.message += "; allowed: " + spec->allowedText();
+  return is;
+}
+
+std::vector<ProfileIssue> Profile::check() const {
+  std::vector<ProfileIssue> issues;
+  const auto& reg = ProfileSchemas::instance();
+  for (const auto& [name, sec] : sections_) {
+    const ValueOrigin sec_origin =
+        sec.empty() ? ValueOrigin{origin_, 0} : sec.front().second.origin;
+    auto cands = reg.candidates(name);
+    if (cands.empty()) {
+      std::string known;
+      for (const auto& s : reg.all())
+        if (known.find(s.name) == std::string::npos) known += (known.empty() ? "" : ", ") + s.name;
+      issues.push_back({sec_origin, name, "", "unknown section (known: " + known + ")"});
+      continue;
+    }
+    const SectionSchema* schema = cands.front();
+    if (!schema->variant_key.empty()) {
+      const std::string& vk = schema->variant_key;
+      const Entry* ve = nullptr;
+      for (const auto& [k, e] : sec)
+        if (k == vk) ve = &e;
+      std::string allowed;
+      for (const auto* c : cands) allowed += (allowed.empty() ? "" : ", ") + c->variant_value;
+      if (!ve) {
+        issues.push_back({sec_origin, name, vk, "missing; it must be one of " + allowed});
+        continue;
+      }
+      schema = nullptr;
+      for (const auto* c : cands)
+        if (c->variant_value == ve->value) schema = c;
+      if (!schema) {
+        issues.push_back({ve->origin, name, vk, "'" + ve->value + "' is not one of " + allowed});
+        continue;
+      }
+    }
+    std::vector<std::pair<std::string, std::string>> kv;
+    for (const auto& [k, e] : sec) kv.emplace_back(k, e.value);
+    for (const auto& [key, msg] : schema->validate(kv)) {
+      if (key.empty()) {
+        issues.push_back({sec_origin, name, "", msg});
+        continue;
+      }
+      const Entry* e = nullptr;
+      for (const auto& [k, en] : sec)
+        if (k == key) e = &en;
+      const ParamSpec* spec = nullptr;
+      for (const auto& s : schema->specs)
+        if (s.key == key) spec = &s;
+      if (!spec) {
+        std::string best;
+        size_t bestd = 3;
+        for (const auto& s : schema->specs) {
+          const size_t d = editDistance(key, s.key);
+          if (d < bestd) bestd = d, best = s.key;
+        }
+        std::string m = "unknown key";
+        if (!best.empty()) m += " (did you mean '" + best + "'?)";
+        std::string keys;
+        for (const auto& s : schema->specs) keys += (keys.empty() ? "" : ", ") + s.key;
+        m += "; keys of [" + name + "]: " + keys;
+        issues.push_back({e ? e->origin : sec_origin, name, key, m});
+      } else {
+        issues.push_back(issueFor(name, key, *e, msg, spec));
+      }
+    }
+  }
+  if (!sections_.count("robot"))
+    issues.push_back(
+        {ValueOrigin{origin_, 0}, "robot", "", "missing: every profile describes its robot"});
+  return issues;
+}
+
+void Profile::validate() const {
+  const auto issues = check();
+  if (issues.empty()) return;
+  std::string msg = origin_ + ": " + std::to_string(issues.size()) + " problem(s) in the profile:";
+  for (const auto& is : issues) msg += "\n  " + is.text();
+  throw InputError(msg);
+}
+
+// ---------------------------------------------------------------- access
+
+std::vector<std::string> Profile::sectionNames() const {
+  std::vector<std::string> out;
+  for (const auto& [k, v] : sections_) out.push_back(k);
+  return out;
+}
+
+std::vector<std::string> Profile::sectionsWithPrefix(const std::string& prefix) const {
+  std::vector<std::string> out;
+  for (const auto& [k, v] : sections_)
+    if (k.compare(0, prefix.size(), prefix) == 0) out.push_back(k);
+  return out;
+}
+
+const Profile::Section* Profile::find(const std::string& name) const {
+  auto it = sections_.find(name);
+  return it == sections_.end() ? nullptr : &it->second;
+}
+
+std::string Profile::value(const std::string& section, const std::string& key,
+                           const std::string& fallback) const {
+  if (const Section* s = find(section))
+    for (const auto& [k, e] : *s)
+      if (k == key) return e.value;
+  return fallback;
+}
+
+std::string Profile::resolvedText() const {
+  std::ostringstream os;
+  os << "; resolved profile " << origin_ << "\n; files read:";
+  for (const auto& f : files_) os << " " << f;
+  os << "\n";
+  const auto& reg = ProfileSchemas::instance();
+  for (const auto& [name, sec] : sections_) {
+    os << "\n[" << name << "]\n";
+    auto cands = reg.candidates(name);
+    const SectionSchema* schema = cands.empty() ? nullptr : cands.front();
+    if (schema && !schema->variant_key.empty()) {
+      const std::string v = value(name, schema->variant_key);
+      schema = nullptr;
+      for (const auto* c : cands)
+        if (c->variant_value == v) schema = c;
+    }
+    auto entryOf = [&](const std::string& key) -> const Entry* {
+      for (const auto& [k, e] : sec)
+        if (k == key) return &e;
+      return nullptr;
+    };
+    if (!schema) {
+      os << "; (no schema: not validated)\n";
+      for (const auto& [k, e] : sec) os << k << " = " << e.value << "\n";
+      continue;
+    }
+    for (const auto& spec : schema->specs) {
+      const Entry* e = entryOf(spec.key);
+      std::string line = spec.key + " = " + (e ? e->value : spec.default_text);
+      if (line.size() < 34) line.resize(34, ' ');
+      os << line << " ; " << (spec.unit.empty() ? "" : "[" + spec.unit + "] ")
+         << (e ? "from " + e->origin.where() : std::string("default")) << ": " << spec.meaning
+         << "\n";
+    }
+  }
+  return os.str();
+}
+
+void Profile::toMrptConfig(mrpt::config::CConfigFileMemory& out) const {
+  std::ostringstream os;
+  for (const auto& [name, sec] : sections_) {
+    os << "[" << name << "]\n";
+    for (const auto& [k, e] : sec) os << k << " = " << e.value << "\n";
+  }
+  out.setContent(os.str());
+}
+
+}  // namespace carenav
