@@ -1,0 +1,58 @@
+// carenav: mapping, localisation and navigation for assistive indoor robots.
+#include "commands.h"
+
+#include <carenav/common/errors.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <iostream>
+
+#ifndef CARENAV_VERSION
+#define CARENAV_VERSION "dev"
+#endif
+#ifndef CARENAV_DEFAULT_DATASETS
+#define CARENAV_DEFAULT_DATASETS "/usr/share/mrpt/datasets"
+#endif
+
+namespace carenav::app {
+std::string mrptDatasetsDir() {
+  if (const char* e = std::getenv("CARENAV_MRPT_DATASETS"); e && *e) return e;
+  return CARENAV_DEFAULT_DATASETS;
+}
+}  // namespace carenav::app
+
+int main(int argc, char** argv) {
+  using namespace carenav;
+  CLI::App app{
+      "carenav: mapping, localisation and navigation for assistive indoor robots "
+      "(walkers, social and care robots), on MRPT.\n"
+      "Exit codes: 0 ok, 1 runtime failure, 2 bad usage or bad input."};
+  app.set_version_flag("--version", std::string(CARENAV_VERSION));
+  app.require_subcommand(1);
+  app::GlobalOptions g;
+  app.add_flag("-q,--quiet", g.quiet, "No progress display and no chatter on stderr");
+  app::addProfileCommand(app, g);
+  app::addRawlogCommand(app, g);
+  app::addDemoCommand(app, g);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);  // prints the message and a hint
+    return kExitInput;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "carenav: error: %s\n", e.what());
+    return kExitInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "carenav: failure: %s\n", e.what());
+    return kExitRuntime;
+  }
+  return kExitOk;
+}
