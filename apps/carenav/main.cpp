@@ -1,6 +1,7 @@
 // carenav: mapping, localisation and navigation for assistive indoor robots.
 #include "commands.h"
 
+#include <carenav/common/crash_guard.h>
 #include <carenav/common/errors.h>
 
 #include <cstdio>
@@ -24,6 +25,8 @@ std::string mrptDatasetsDir() {
 
 int main(int argc, char** argv) {
   using namespace carenav;
+  installCrashGuard();
+  limitAddressSpace(defaultMemoryLimitMB());
   CLI::App app{
       "carenav: mapping, localisation and navigation for assistive indoor robots "
       "(walkers, social and care robots), on MRPT.\n"

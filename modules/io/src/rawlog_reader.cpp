@@ -1,5 +1,7 @@
 #include <carenav/io/rawlog_reader.h>
 
+#include <carenav/common/crash_guard.h>
+
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/maps/registerAllClasses.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
@@ -117,6 +119,12 @@ bool RawlogReader::next(RawlogEntry& out) {
   };
   mrpt::serialization::CSerializable::Ptr obj;
   try {
+    // MRPT's deserialisers can crash on corrupt size fields; say where.
+    const CrashContext guard(path_ + ": rawlog broken at entry " + std::to_string(entries_) +
+                             " (byte " + std::to_string(start) + " of the " +
+                             (gzipped_ ? "uncompressed " : "") +
+                             "stream): corrupt data (MRPT's reader crashed on it); the " +
+                             std::to_string(entries_) + " entries before it were read");
     auto arch = mrpt::serialization::archiveFrom(*stream_);
     obj = arch.ReadObject();
   } catch (const mrpt::serialization::CExceptionEOF& e) {
@@ -127,7 +135,7 @@ bool RawlogReader::next(RawlogEntry& out) {
     }
     throw broken(e.what());
   } catch (const std::bad_alloc&) {
-    throw broken("corrupt (a size field asks for more memory than exists)");
+    throw broken("a size field asks for more memory than the memory limit allows");
   } catch (const std::exception& e) {
     if (stream_->count() == start && entries_ > 0) return false;
     throw broken(e.what());
