@@ -8,6 +8,9 @@ packages=(
   g++ make cmake
   # MRPT libraries carenav links (no GUI: never mrpt-gui, -nanogui, -hwdrivers, -apps libs)
   libmrpt-config-dev libmrpt-io-dev libmrpt-serialization-dev libmrpt-obs-dev libmrpt-maps-dev
+  libmrpt-slam-dev libmrpt-graphs-dev
+  # header-only use of its sparse Levenberg-Marquardt pose-graph optimiser (the library is not linked)
+  libmrpt-graphslam-dev
   # MRPT's real datasets (/usr/share/mrpt/datasets): tests and the demo
   mrpt-common
   # MRPT's own command-line apps (rawlog-edit, icp-slam, pf-localization): test and benchmark baselines

@@ -9,7 +9,8 @@
 
 namespace carenav::app {
 
-CLI::App* addDemoCommand(CLI::App& app, const GlobalOptions& g) {
+namespace {
+void addDemoCommand(CLI::App& app, const GlobalOptions& g) {
   auto* cmd = app.add_subcommand(
       "demo",
       "Run the main job on embedded defaults, on MRPT's real SENA rawlog (a loop through the "
@@ -31,7 +32,9 @@ CLI::App* addDemoCommand(CLI::App& app, const GlobalOptions& g) {
     std::cout << ri.toText() << std::flush;
     if (ri.error) throw InputError(*ri.error);
   });
-  return cmd;
 }
+}  // namespace
+
+CARENAV_COMMAND(200, addDemoCommand);
 
 }  // namespace carenav::app

@@ -29,7 +29,8 @@ void addCommon(CLI::App* sub, ProfileArgs& a) {
 }
 }  // namespace
 
-CLI::App* addProfileCommand(CLI::App& app, const GlobalOptions& g) {
+namespace {
+void addProfileCommand(CLI::App& app, const GlobalOptions& g) {
   auto* cmd = app.add_subcommand("profile", "Inspect and validate robot profiles");
   cmd->require_subcommand(1);
   auto args = std::make_shared<ProfileArgs>();
@@ -58,7 +59,9 @@ CLI::App* addProfileCommand(CLI::App& app, const GlobalOptions& g) {
       std::cout << ")\n";
     }
   });
-  return cmd;
 }
+}  // namespace
+
+CARENAV_COMMAND(10, addProfileCommand);
 
 }  // namespace carenav::app

@@ -8,7 +8,8 @@
 
 namespace carenav::app {
 
-CLI::App* addRawlogCommand(CLI::App& app, const GlobalOptions& g) {
+namespace {
+void addRawlogCommand(CLI::App& app, const GlobalOptions& g) {
   auto* cmd = app.add_subcommand("rawlog", "Inspect MRPT rawlogs");
   cmd->require_subcommand(1);
   struct Args {
@@ -28,7 +29,9 @@ CLI::App* addRawlogCommand(CLI::App& app, const GlobalOptions& g) {
     std::cout << (a->json ? ri.toJson() : ri.toText()) << std::flush;
     if (ri.error) throw InputError(*ri.error);
   });
-  return cmd;
 }
+}  // namespace
+
+CARENAV_COMMAND(20, addRawlogCommand);
 
 }  // namespace carenav::app

@@ -1,5 +1,5 @@
-// Subcommands of the carenav executable. Each file adds one command to the
-// CLI11 app; all logic lives in the modules.
+// Subcommands of the carenav executable. Each cmd_*.cpp file adds one command
+// to the CLI11 app and registers itself here; all logic lives in the modules.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -14,11 +14,31 @@ struct GlobalOptions {
   bool quiet = false;  ///< no progress, no chatter on stderr
 };
 
-/** Each returns the subcommand it added; its callback runs the command and
- *  throws carenav::InputError (exit 2) or std::exception (exit 1). */
-CLI::App* addProfileCommand(CLI::App& app, const GlobalOptions& g);
-CLI::App* addRawlogCommand(CLI::App& app, const GlobalOptions& g);
-CLI::App* addDemoCommand(CLI::App& app, const GlobalOptions& g);
+/** Adds a command to the app. Its callback runs the command and throws
+ *  carenav::InputError (exit 2) or std::exception (exit 1). */
+using CommandAdder = void (*)(CLI::App& app, const GlobalOptions& g);
+
+/** Registered commands, in help order. */
+std::vector<std::pair<int, CommandAdder>>& commandRegistry();
+/** Registered `carenav import <format>` subcommands. */
+std::vector<CommandAdder>& importRegistry();
+
+struct CommandRegistrar {
+  CommandRegistrar(int order, CommandAdder f) { commandRegistry().emplace_back(order, f); }
+};
+struct ImportRegistrar {
+  explicit ImportRegistrar(CommandAdder f) { importRegistry().push_back(f); }
+};
+
+/** In a cmd_*.cpp: CARENAV_COMMAND(30, addSlamCommand); the order sorts --help.
+ *  Orders: profile 10, rawlog 20, slam 30, localize 40, perceive 50,
+ *  navigate 60, places 70, import 80, eval 90, simulate 100, demo 200. */
+#define CARENAV_COMMAND(order, fn) \
+  static const ::carenav::app::CommandRegistrar carenav_cmd_registrar_##fn(order, fn)
+/** In a cmd_import_*.cpp: CARENAV_IMPORT(addImportCarmen); `fn` receives the
+ *  `import` subcommand as its app. */
+#define CARENAV_IMPORT(fn) \
+  static const ::carenav::app::ImportRegistrar carenav_import_registrar_##fn(fn)
 
 /** Where MRPT's datasets are: $CARENAV_MRPT_DATASETS, else the build-time path. */
 std::string mrptDatasetsDir();

@@ -3,7 +3,9 @@
 
 #include <carenav/common/crash_guard.h>
 #include <carenav/common/errors.h>
+#include <carenav/slam/slam_params.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -17,6 +19,14 @@
 #endif
 
 namespace carenav::app {
+std::vector<std::pair<int, CommandAdder>>& commandRegistry() {
+  static std::vector<std::pair<int, CommandAdder>> r;
+  return r;
+}
+std::vector<CommandAdder>& importRegistry() {
+  static std::vector<CommandAdder> r;
+  return r;
+}
 std::string mrptDatasetsDir() {
   if (const char* e = std::getenv("CARENAV_MRPT_DATASETS"); e && *e) return e;
   return CARENAV_DEFAULT_DATASETS;
@@ -27,6 +37,8 @@ int main(int argc, char** argv) {
   using namespace carenav;
   installCrashGuard();
   limitAddressSpace(defaultMemoryLimitMB());
+  // Every module's profile sections, so `profile check` knows all keys.
+  slam::registerProfileSections();
   CLI::App app{
       "carenav: mapping, localisation and navigation for assistive indoor robots "
       "(walkers, social and care robots), on MRPT.\n"
@@ -35,9 +47,10 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app::GlobalOptions g;
   app.add_flag("-q,--quiet", g.quiet, "No progress display and no chatter on stderr");
-  app::addProfileCommand(app, g);
-  app::addRawlogCommand(app, g);
-  app::addDemoCommand(app, g);
+  auto& cmds = app::commandRegistry();
+  std::stable_sort(cmds.begin(), cmds.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [order, add] : cmds) add(app, g);
 
   try {
     app.parse(argc, argv);

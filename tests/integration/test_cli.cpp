@@ -11,68 +11,10 @@
 #include <regex>
 #include <sstream>
 
+#include "cli_helpers.h"
+
+using namespace carenav_test;
 namespace fs = std::filesystem;
-
-namespace {
-const std::string kBin = CARENAV_BIN;
-const std::string kSrc = CARENAV_SOURCE_DIR;
-const std::string kDatasets = CARENAV_MRPT_DATASETS;
-const std::string kSena = kDatasets + "/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";
-
-struct RunResult {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-fs::path scratch() {
-  auto d = fs::temp_directory_path() / ("carenav_cli_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-/** Runs a shell command line; captures stdout, stderr and the exit code. */
-RunResult shell(const std::string& cmdline) {
-  const auto errfile = scratch() / "stderr.txt";
-  RunResult r;
-  FILE* p = popen((cmdline + " 2>" + quote(errfile.string())).c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int st = pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-  r.err = slurp(errfile);
-  return r;
-}
-
-RunResult carenav(const std::vector<std::string>& args) {
-  std::string cmd = quote(kBin);
-  for (const auto& a : args) cmd += " " + quote(a);
-  return shell(cmd);
-}
-
-uint64_t jsonNumber(const std::string& json, const std::string& key) {
-  std::smatch m;
-  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([0-9.]+)"))) {
-    ADD_FAILURE() << "no key " << key << " in " << json;
-    return 0;
-  }
-  return std::stoull(m[1]);
-}
-}  // namespace
 
 TEST(Cli, HelpEverywhereAndExitCodes) {
   for (std::vector<std::string> args : {std::vector<std::string>{"--help"},

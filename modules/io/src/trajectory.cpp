@@ -1,0 +1,68 @@
+#include <carenav/common/errors.h>
+#include <carenav/io/trajectory.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace carenav::io {
+
+void writeTum(const std::string& path, const Trajectory2D& traj) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    if (!f) throw std::runtime_error(path + ": cannot write the trajectory");
+    f << "# timestamp x y z qx qy qz qw\n";
+    char buf[256];
+    for (const auto& p : traj) {
+      std::snprintf(buf, sizeof buf, "%.6f %.6f %.6f 0 0 0 %.9f %.9f\n", p.t, p.x, p.y,
+                    std::sin(p.yaw / 2), std::cos(p.yaw / 2));
+      f << buf;
+    }
+    if (!f.flush()) throw std::runtime_error(path + ": cannot write the trajectory");
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+Trajectory2D readTum(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw InputError(path + ": cannot open the trajectory (no such file?)");
+  Trajectory2D out;
+  std::string line;
+  int lineno = 0;
+  while (std::getline(f, line)) {
+    ++lineno;
+    const auto b = line.find_first_not_of(" \t\r");
+    if (b == std::string::npos || line[b] == '#') continue;
+    std::istringstream is(line);
+    double v[8];
+    int n = 0;
+    while (n < 8 && is >> v[n]) ++n;
+    std::string extra;
+    if (n != 8 || (is >> extra))
+      throw InputError(path + ":" + std::to_string(lineno) +
+                       ": expected 8 numbers 't x y z qx qy qz qw'");
+    for (double x : v)
+      if (!std::isfinite(x))
+        throw InputError(path + ":" + std::to_string(lineno) + ": not a finite number");
+    const double qx = v[4], qy = v[5], qz = v[6], qw = v[7];
+    if (qx * qx + qy * qy + qz * qz + qw * qw < 1e-18)
+      throw InputError(path + ":" + std::to_string(lineno) + ": zero quaternion");
+    if (!out.empty() && v[0] < out.back().t)
+      throw InputError(path + ":" + std::to_string(lineno) + ": timestamp goes backwards");
+    TimedPose2D p;
+    p.t = v[0];
+    p.x = v[1];
+    p.y = v[2];
+    // Yaw of the rotation; this form needs no normalised quaternion.
+    p.yaw = std::atan2(2 * (qw * qz + qx * qy), qw * qw + qx * qx - qy * qy - qz * qz);
+    out.push_back(p);
+  }
+  if (out.empty()) throw InputError(path + ": no poses in the trajectory file");
+  return out;
+}
+
+}  // namespace carenav::io

@@ -1,0 +1,57 @@
+// Parameters of `carenav slam`: the profile's [slam] and [icp] sections.
+#pragma once
+
+#include <carenav/common/params.h>
+
+#include <string>
+
+namespace carenav::slam {
+
+/** [slam]: how a map is built from a rawlog.
+ *  ```ini
+ *  [slam]
+ *  method = icp-graph
+ *  sensor = LASER            ; "" takes the first 2D scan of each entry
+ *  grid_resolution = 0.05
+ *  ```
+ */
+struct SlamParams {
+  std::string method = "icp-graph";  ///< icp | icp-graph | rbpf
+  std::string sensor;                ///< sensorLabel of the 2D scans to map with ("" any)
+  bool use_odometry = true;          ///< false: laser only (odometry ignored)
+  double localization_lin_distance = 0.2;  ///< m, robot motion between ICP corrections
+  double localization_ang_distance = 5;    ///< deg
+  double insertion_lin_distance = 0.5;     ///< m, motion between scans inserted in the map
+  double insertion_ang_distance = 20;      ///< deg
+  double min_icp_goodness = 0.4;           ///< [0,1] ICP quality to accept a correction
+  double grid_resolution = 0.05;           ///< m, cell size of the output occupancy grid
+  double scan_range_max = 0;               ///< m, drop longer ranges (0: keep the scan's own)
+  // icp-graph only
+  double keyframe_distance = 0.5;       ///< m, motion between keyframes (pose-graph nodes)
+  double keyframe_angle = 20;           ///< deg
+  double loop_search_radius = 4.0;      ///< m, keyframes this close are loop candidates
+  int loop_min_separation = 20;         ///< keyframes between a candidate and the current one
+  double loop_min_goodness = 0.8;       ///< [0,1] ICP quality to accept a loop closure
+  double loop_max_correction = 3.0;     ///< m, largest loop-closure correction accepted
+  static const ParamTable<SlamParams>& table();
+};
+
+/** [icp]: the scan matcher, with MRPT's CICP::TConfigParams key names so an
+ *  icp-slam [ICP] section can be copied over. */
+struct IcpParams {
+  std::string ICP_algorithm = "icpClassic";  ///< icpClassic | icpLevenbergMarquardt
+  int maxIterations = 80;
+  double thresholdDist = 0.3;       ///< m, initial pairing distance
+  double thresholdAng_DEG = 5;      ///< deg, pairing distance growth with range
+  double ALFA = 0.8;                ///< threshold shrink factor after convergence
+  double smallestThresholdDist = 0.05;  ///< m
+  bool onlyClosestCorrespondences = true;
+  bool onlyUniqueRobust = true;
+  int corresponding_points_decimation = 5;
+  static const ParamTable<IcpParams>& table();
+};
+
+/** Registers [slam] and [icp] with the profile schemas. */
+void registerProfileSections();
+
+}  // namespace carenav::slam

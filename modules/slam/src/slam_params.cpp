@@ -1,0 +1,76 @@
+#include <carenav/common/profile.h>
+#include <carenav/slam/slam_params.h>
+
+namespace carenav::slam {
+
+const ParamTable<SlamParams>& SlamParams::table() {
+  static const auto t =
+      ParamTable<SlamParams>()
+          .choice("method", &SlamParams::method, {"icp", "icp-graph", "rbpf"},
+                  "icp: MRPT's ICP map builder; icp-graph: ICP with keyframes, loop closure "
+                  "and pose-graph optimisation; rbpf: Rao-Blackwellised particle filter")
+          .text("sensor", &SlamParams::sensor,
+                "sensorLabel of the 2D scans to map with (empty: the first 2D scan of each "
+                "entry)")
+          .flag("use_odometry", &SlamParams::use_odometry,
+                "use odometry as the motion prior (false: laser only)")
+          .real("localization_lin_distance", &SlamParams::localization_lin_distance, "m", 0, 10,
+                "robot motion between ICP pose corrections")
+          .real("localization_ang_distance", &SlamParams::localization_ang_distance, "deg", 0,
+                180, "robot turn between ICP pose corrections")
+          .real("insertion_lin_distance", &SlamParams::insertion_lin_distance, "m", 0, 10,
+                "robot motion between scans inserted in the map")
+          .real("insertion_ang_distance", &SlamParams::insertion_ang_distance, "deg", 0, 180,
+                "robot turn between scans inserted in the map")
+          .real("min_icp_goodness", &SlamParams::min_icp_goodness, "", 0, 1,
+                "smallest ICP match quality accepted as a correction")
+          .real("grid_resolution", &SlamParams::grid_resolution, "m", 0.005, 1,
+                "cell size of the output occupancy grid")
+          .real("scan_range_max", &SlamParams::scan_range_max, "m", 0, 200,
+                "ignore longer ranges (0: the scan's own maximum)")
+          .real("keyframe_distance", &SlamParams::keyframe_distance, "m", 0.05, 10,
+                "icp-graph: motion between keyframes")
+          .real("keyframe_angle", &SlamParams::keyframe_angle, "deg", 1, 180,
+                "icp-graph: turn between keyframes")
+          .real("loop_search_radius", &SlamParams::loop_search_radius, "m", 0.1, 50,
+                "icp-graph: keyframes this close to the current one are loop candidates")
+          .integer("loop_min_separation", &SlamParams::loop_min_separation, "", 2, 100000,
+                   "icp-graph: keyframes between a loop candidate and the current one")
+          .real("loop_min_goodness", &SlamParams::loop_min_goodness, "", 0, 1,
+                "icp-graph: smallest ICP quality accepted for a loop closure")
+          .real("loop_max_correction", &SlamParams::loop_max_correction, "m", 0.01, 100,
+                "icp-graph: largest correction a loop closure may make");
+  return t;
+}
+
+const ParamTable<IcpParams>& IcpParams::table() {
+  static const auto t =
+      ParamTable<IcpParams>()
+          .choice("ICP_algorithm", &IcpParams::ICP_algorithm,
+                  {"icpClassic", "icpLevenbergMarquardt"}, "MRPT's ICP variant")
+          .integer("maxIterations", &IcpParams::maxIterations, "", 1, 10000,
+                   "iterations before giving up on convergence")
+          .real("thresholdDist", &IcpParams::thresholdDist, "m", 0.001, 10,
+                "initial largest distance of a point pair")
+          .real("thresholdAng_DEG", &IcpParams::thresholdAng_DEG, "deg", 0, 90,
+                "growth of the pairing distance with range")
+          .real("ALFA", &IcpParams::ALFA, "", 0.01, 0.999,
+                "factor shrinking the thresholds after each convergence")
+          .real("smallestThresholdDist", &IcpParams::smallestThresholdDist, "m", 0.001, 10,
+                "smallest pairing distance")
+          .flag("onlyClosestCorrespondences", &IcpParams::onlyClosestCorrespondences,
+                "pair each point with its closest neighbour only")
+          .flag("onlyUniqueRobust", &IcpParams::onlyUniqueRobust,
+                "force unique correspondences both ways")
+          .integer("corresponding_points_decimation", &IcpParams::corresponding_points_decimation,
+                   "", 1, 100, "use every n-th point of the scan");
+  return t;
+}
+
+void registerProfileSections() {
+  auto& reg = ProfileSchemas::instance();
+  reg.add(SectionSchema::of(SlamParams::table(), "slam", "map building from rawlogs"));
+  reg.add(SectionSchema::of(IcpParams::table(), "icp", "ICP scan matcher (MRPT CICP names)"));
+}
+
+}  // namespace carenav::slam
