@@ -1,0 +1,201 @@
+// PNG pictures of occupancy grids with overlays and a scale bar.
+#include <carenav/common/errors.h>
+#include <carenav/io/map_render.h>
+
+#include <mrpt/img/TColor.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "map_io_internal.h"
+
+namespace carenav::io {
+
+namespace {
+
+using mrpt::img::TColor;
+
+constexpr uint8_t kFree = 255, kOccupied = 0, kUnknown = 190;
+
+TColor toColor(const Rgb& c) { return TColor(c.r, c.g, c.b); }
+
+// Text on a white box, so it reads over any map.
+void label(mrpt::img::CImage& img, int x, int y, const std::string& text, const TColor& colour) {
+  constexpr int kCharW = 9, kCharH = 15;  // CCanvas' default 9x15 font
+  const int w = static_cast<int>(text.size()) * kCharW;
+  img.filledRectangle(x - 2, y - 2, x + w + 1, y + kCharH + 1, TColor(255, 255, 255));
+  img.textOut(x, y, text, colour);
+}
+
+std::string metresText(double m) {
+  char b[32];
+  if (m >= 1)
+    std::snprintf(b, sizeof b, "%g m", m);
+  else
+    std::snprintf(b, sizeof b, "%g cm", m * 100);
+  return b;
+}
+
+// The largest of 1-2-5 steps not above `target` metres.
+double niceLength(double target) {
+  double best = 0.1;
+  for (double decade = 0.1; decade <= 1e5; decade *= 10)
+    for (double k : {1.0, 2.0, 5.0})
+      if (k * decade <= target) best = k * decade;
+  return best;
+}
+
+}  // namespace
+
+int RenderGeometry::px(double x) const {
+  return static_cast<int>(std::floor((x - x_min) * pixels_per_metre));
+}
+int RenderGeometry::py(double y) const {
+  return static_cast<int>(std::floor((y_max - y) * pixels_per_metre));
+}
+
+mrpt::img::CImage renderGridMap(const COccupancyGridMap2D& map, const RenderOptions& o,
+                                RenderGeometry* geometry) {
+  const int sx = static_cast<int>(map.getSizeX()), sy = static_cast<int>(map.getSizeY());
+  if (sx <= 0 || sy <= 0) throw InputError("the map has no cells to draw");
+  const double res = map.getResolution();
+
+  // One class (or grey level) per raw cell value.
+  using Cell = COccupancyGridMap2D::cellType;
+  using UCell = COccupancyGridMap2D::cellTypeUnsigned;
+  std::vector<uint8_t> shade(size_t{1} << (8 * sizeof(Cell)));
+  for (size_t u = 0; u < shade.size(); ++u) {
+    const float p = COccupancyGridMap2D::l2p(static_cast<Cell>(static_cast<UCell>(u)));
+    if (o.grey_levels) {
+      shade[u] = static_cast<uint8_t>(std::lround(std::clamp(p, 0.0f, 1.0f) * 255));
+    } else {
+      const CellClass k = classifyCell(p, o.thresholds);
+      shade[u] = k == CellClass::Free ? kFree : k == CellClass::Occupied ? kOccupied : kUnknown;
+    }
+  }
+  const auto& raw = map.getRawMap();
+  auto cellShade = [&](int cx, int cy) { return shade[static_cast<UCell>(raw[cx + cy * sx])]; };
+
+  // Cells shown: all, or the known ones plus a margin.
+  int cx0 = 0, cx1 = sx, cy0 = 0, cy1 = sy;
+  if (o.crop_to_known) {
+    int ax0 = sx, ax1 = -1, ay0 = sy, ay1 = -1;
+    const OccupancyThresholds& t = o.thresholds;
+    for (int cy = 0; cy < sy; ++cy)
+      for (int cx = 0; cx < sx; ++cx)
+        if (classifyCell(COccupancyGridMap2D::l2p(raw[cx + cy * sx]), t) != CellClass::Unknown) {
+          ax0 = std::min(ax0, cx);
+          ax1 = std::max(ax1, cx);
+          ay0 = std::min(ay0, cy);
+          ay1 = std::max(ay1, cy);
+        }
+    if (ax1 >= 0) {
+      const int m = static_cast<int>(std::ceil(std::max(0.0, o.crop_margin_m) / res));
+      cx0 = std::max(0, ax0 - m);
+      cx1 = std::min(sx, ax1 + 1 + m);
+      cy0 = std::max(0, ay0 - m);
+      cy1 = std::min(sy, ay1 + 1 + m);
+    }
+  }
+  const int ncx = cx1 - cx0, ncy = cy1 - cy0;
+
+  // Pixels per cell: at least the option, enough for min_width_px, at most max_side_px.
+  double s = std::max(1, o.pixels_per_cell);
+  if (ncx * s < o.min_width_px) s = std::ceil(static_cast<double>(o.min_width_px) / ncx);
+  const int max_side = std::max(64, o.max_side_px);
+  if (std::max(ncx, ncy) * s > max_side) {
+    s = std::floor(static_cast<double>(max_side) / std::max(ncx, ncy));
+    if (s < 1) s = static_cast<double>(max_side) / std::max(ncx, ncy);  // shrink big maps
+  }
+  const int w = std::max(1, static_cast<int>(std::floor(ncx * s)));
+  const int h = std::max(1, static_cast<int>(std::floor(ncy * s)));
+
+  RenderGeometry g;
+  g.x_min = map.getXMin() + cx0 * res;
+  g.y_max = map.getYMin() + cy1 * res;
+  g.pixels_per_metre = s / res;
+  g.width = w;
+  g.height = h;
+
+  mrpt::img::CImage img(static_cast<unsigned>(w), static_cast<unsigned>(h), mrpt::img::CH_RGB);
+  std::vector<int> col_cell(w);
+  for (int u = 0; u < w; ++u) col_cell[u] = std::min(cx1 - 1, cx0 + static_cast<int>(u / s));
+  for (int v = 0; v < h; ++v) {
+    const int cy = std::max(cy0, cy1 - 1 - static_cast<int>(v / s));  // north up
+    uint8_t* row = img.ptrLine<uint8_t>(static_cast<unsigned>(v));
+    for (int u = 0; u < w; ++u) {
+      const uint8_t c = cellShade(col_cell[u], cy);
+      row[3 * u] = row[3 * u + 1] = row[3 * u + 2] = c;
+    }
+  }
+
+  for (const Overlay& ov : o.overlays) {
+    if (ov.points.empty()) continue;
+    const TColor c = toColor(ov.colour);
+    const int th = std::max(1, ov.thickness);
+    if (ov.points_only) {
+      const int r = std::max(1, th);
+      for (const auto& p : ov.points)
+        img.filledRectangle(g.px(p.x) - r, g.py(p.y) - r, g.px(p.x) + r, g.py(p.y) + r, c);
+    } else {
+      for (size_t i = 1; i < ov.points.size(); ++i) {
+        const auto& a = ov.points[i - 1];
+        const auto& b = ov.points[i];
+        img.line(g.px(a.x), g.py(a.y), g.px(b.x), g.py(b.y), c, static_cast<unsigned>(th));
+      }
+      if (ov.points.size() == 1)
+        img.filledRectangle(g.px(ov.points[0].x) - th, g.py(ov.points[0].y) - th,
+                            g.px(ov.points[0].x) + th, g.py(ov.points[0].y) + th, c);
+    }
+    if (ov.start_end_markers) {
+      const auto& a = ov.points.front();
+      const auto& b = ov.points.back();
+      const int r = std::max(5, 2 * th + 2);
+      img.drawCircle(g.px(a.x), g.py(a.y), r, TColor(0, 160, 0), 3);
+      img.filledRectangle(g.px(b.x) - r + 1, g.py(b.y) - r + 1, g.px(b.x) + r - 1,
+                          g.py(b.y) + r - 1, TColor(200, 0, 0));
+      img.rectangle(g.px(b.x) - r, g.py(b.y) - r, g.px(b.x) + r, g.py(b.y) + r, TColor(0, 0, 0));
+    }
+    if (!ov.label.empty())
+      label(img, g.px(ov.points.front().x) + 6, g.py(ov.points.front().y) - 18, ov.label, c);
+  }
+
+  if (o.scale_bar && w >= 120 && h >= 60) {
+    const double width_m = w / g.pixels_per_metre;
+    const double len = o.scale_bar_m > 0 ? o.scale_bar_m : niceLength(width_m / 5);
+    const int len_px = static_cast<int>(std::lround(len * g.pixels_per_metre));
+    if (len_px >= 4 && len_px < w - 20) {
+      const int x0 = 12, y0 = h - 14;
+      const std::string text = metresText(len);
+      img.filledRectangle(x0 - 6, y0 - 26, x0 + std::max(len_px, 9 * int(text.size())) + 6, y0 + 8,
+                          TColor(255, 255, 255));
+      img.filledRectangle(x0, y0 - 2, x0 + len_px, y0 + 2, TColor(0, 0, 0));
+      img.filledRectangle(x0, y0 - 8, x0 + 1, y0 + 2, TColor(0, 0, 0));
+      img.filledRectangle(x0 + len_px - 1, y0 - 8, x0 + len_px, y0 + 2, TColor(0, 0, 0));
+      img.textOut(x0, y0 - 24, text, TColor(0, 0, 0));
+    }
+  }
+  if (!o.title.empty()) label(img, 8, 6, o.title, TColor(0, 0, 0));
+
+  if (geometry) *geometry = g;
+  return img;
+}
+
+void renderGridMapPng(const COccupancyGridMap2D& map, const std::string& path,
+                      const RenderOptions& options) {
+  map_detail::requireParentFolder(path);
+  const mrpt::img::CImage img = renderGridMap(map, options);
+  map_detail::TempFile tmp(path, ".png");
+  bool ok = false;
+  try {
+    ok = img.saveToFile(tmp.path());
+  } catch (const std::exception&) {
+    ok = false;
+  }
+  if (!ok) throw std::runtime_error(path + ": cannot write the PNG");
+  tmp.commit();
+}
+
+}  // namespace carenav::io

@@ -1,0 +1,628 @@
+// ROS map_server maps: the YAML description, PGM/PNG images, and the
+// pixel-to-cell rules of map_server's loader and map_saver.
+#include <carenav/common/errors.h>
+#include <carenav/io/map_io.h>
+
+#include <mrpt/img/CImage.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include "map_io_internal.h"
+
+namespace carenav::io {
+
+namespace fs = std::filesystem;
+using map_detail::endsWith;
+using map_detail::toLower;
+
+namespace {
+
+// ------------------------------------------------------------ flat YAML
+//
+// A map_server YAML is a flat mapping of scalars plus one short list
+// (origin). A small reader for that subset reports every defect with its
+// line, which a general YAML library does not do in a form we can pass on.
+
+struct YamlValue {
+  int line = 0;
+  bool is_list = false;
+  bool is_nested = false;  ///< a mapping or something else we do not read
+  std::string scalar;
+  std::vector<std::string> items;
+};
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t");
+  return s.substr(b, e - b + 1);
+}
+
+// Removes a trailing comment: '#' at the start or after a blank, outside quotes.
+std::string stripComment(const std::string& s) {
+  char quote = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    const char c = s[i];
+    if (quote) {
+      if (c == quote) quote = 0;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+    } else if (c == '#' && (i == 0 || s[i - 1] == ' ' || s[i - 1] == '\t')) {
+      return s.substr(0, i);
+    }
+  }
+  return s;
+}
+
+class YamlError {
+ public:
+  YamlError(std::string path) : path_(std::move(path)) {}
+  [[noreturn]] void at(int line, const std::string& what) const {
+    throw InputError(path_ + ":" + std::to_string(line) + ": " + what);
+  }
+  [[noreturn]] void file(const std::string& what) const { throw InputError(path_ + ": " + what); }
+
+ private:
+  std::string path_;
+};
+
+std::string unquote(const std::string& v, int line, const YamlError& err) {
+  if (v.size() >= 1 && (v[0] == '"' || v[0] == '\'')) {
+    const char q = v[0];
+    if (v.size() < 2 || v.back() != q) err.at(line, "unterminated quoted string " + v);
+    std::string out;
+    for (size_t i = 1; i + 1 < v.size(); ++i) {
+      if (q == '"' && v[i] == '\\' && i + 2 < v.size()) {
+        out += v[++i];
+      } else if (q == '\'' && v[i] == '\'' && v[i + 1] == '\'') {
+        out += '\'';
+        ++i;
+      } else {
+        out += v[i];
+      }
+    }
+    return out;
+  }
+  return v;
+}
+
+std::vector<std::string> splitFlowList(const std::string& v, int line, const YamlError& err) {
+  if (v.back() != ']') err.at(line, "unterminated list '" + v + "' (a ']' is missing)");
+  const std::string inner = trim(v.substr(1, v.size() - 2));
+  std::vector<std::string> items;
+  if (inner.empty()) return items;
+  std::string cur;
+  char quote = 0;
+  for (char c : inner) {
+    if (quote) {
+      if (c == quote) quote = 0;
+      cur += c;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+      cur += c;
+    } else if (c == ',') {
+      items.push_back(unquote(trim(cur), line, err));
+      cur.clear();
+    } else if (c == '[' || c == '{') {
+      err.at(line, "nested lists or mappings are not expected in '" + v + "'");
+    } else {
+      cur += c;
+    }
+  }
+  items.push_back(unquote(trim(cur), line, err));
+  return items;
+}
+
+std::map<std::string, YamlValue> parseFlatYaml(const std::string& path, const std::string& text) {
+  const YamlError err(path);
+  std::map<std::string, YamlValue> out;
+  std::istringstream is(text);
+  std::string raw;
+  int lineno = 0;
+  std::string open_key;  // a key whose value follows on indented lines
+  while (std::getline(is, raw)) {
+    ++lineno;
+    if (lineno == 1 && raw.compare(0, 3, "\xEF\xBB\xBF") == 0) raw.erase(0, 3);  // UTF-8 BOM
+    if (!raw.empty() && raw.back() == '\r') raw.pop_back();
+    if (raw.find('\0') != std::string::npos)
+      err.at(lineno, "binary data: this is not a YAML text file");
+    const std::string line = trim(stripComment(raw));
+    if (line.empty()) continue;
+    if (line == "---" || line == "...") continue;
+    const bool indented = raw[0] == ' ' || raw[0] == '\t' || raw[0] == '-';
+    if (indented && raw[0] != '-' && open_key.empty())
+      err.at(lineno, "unexpected indentation (a map_server YAML is a flat list of 'key: value')");
+    if (!open_key.empty() && (indented || line[0] == '-')) {
+      YamlValue& v = out[open_key];
+      if (line[0] == '-' && (line.size() == 1 || line[1] == ' ')) {
+        if (v.is_nested && !v.is_list) continue;  // inside some mapping we ignore
+        v.is_list = true;
+        v.items.push_back(unquote(trim(line.substr(1)), lineno, err));
+      } else {
+        v.is_nested = true;  // a nested mapping: fine unless we need the key
+      }
+      continue;
+    }
+    open_key.clear();
+    // key: value, the colon followed by a blank or the end of the line.
+    size_t colon = std::string::npos;
+    char quote = 0;
+    for (size_t i = 0; i < line.size(); ++i) {
+      if (quote) {
+        if (line[i] == quote) quote = 0;
+      } else if (line[i] == '"' || line[i] == '\'') {
+        quote = line[i];
+      } else if (line[i] == ':' &&
+                 (i + 1 == line.size() || line[i + 1] == ' ' || line[i + 1] == '\t')) {
+        colon = i;
+        break;
+      }
+    }
+    if (colon == std::string::npos) err.at(lineno, "expected 'key: value', got '" + line + "'");
+    const std::string key = unquote(trim(line.substr(0, colon)), lineno, err);
+    if (key.empty()) err.at(lineno, "empty key");
+    const std::string value = trim(line.substr(colon + 1));
+    if (auto it = out.find(key); it != out.end())
+      err.at(lineno,
+             "duplicate key '" + key + "' (first on line " + std::to_string(it->second.line) + ")");
+    YamlValue v;
+    v.line = lineno;
+    if (value.empty()) {
+      open_key = key;
+    } else if (value[0] == '[') {
+      v.is_list = true;
+      v.items = splitFlowList(value, lineno, err);
+    } else if (value[0] == '{' || value[0] == '&' || value[0] == '*' || value[0] == '|' ||
+               value[0] == '>') {
+      v.is_nested = true;
+    } else {
+      v.scalar = unquote(value, lineno, err);
+    }
+    out[key] = v;
+  }
+  return out;
+}
+
+bool parseDouble(const std::string& s, double& out) {
+  if (s.empty()) return false;
+  const char* b = s.c_str();
+  char* e = nullptr;
+  errno = 0;
+  out = std::strtod(b, &e);
+  return e != b && *e == '\0' && errno != ERANGE && std::isfinite(out);
+}
+
+// ------------------------------------------------------------ images
+
+std::string readWholeFile(const std::string& path, const char* what) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path + ": no such file");
+  if (fs::is_directory(path, ec))
+    throw InputError(path + ": is a folder, expected " + std::string(what));
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(path + ": cannot open (permissions?)");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// A PNM header: magic, width, height, maxval with blanks and comments between.
+class PnmParser {
+ public:
+  PnmParser(const std::string& path, const std::string& data) : path_(path), d_(data) {}
+
+  GreyImage parse() {
+    const char kind = d_[1];
+    const bool ascii = kind == '2' || kind == '3';
+    const int channels = (kind == '3' || kind == '6') ? 3 : 1;
+    pos_ = 2;
+    const uint64_t w = headerNumber("width");
+    const uint64_t h = headerNumber("height");
+    const uint64_t maxval = headerNumber("maxval");
+    if (w == 0 || h == 0)
+      fail("image size " + std::to_string(w) + " x " + std::to_string(h) + " is empty");
+    if (w > 200000 || h > 200000 || w * h > (uint64_t{1} << 31))
+      fail("image size " + std::to_string(w) + " x " + std::to_string(h) + " is too large");
+    if (maxval == 0) fail("maxval 0 is invalid");
+    if (maxval > 255)
+      fail("maxval " + std::to_string(maxval) + " > 255: 16-bit images are not supported");
+    // Exactly one blank separates the header from binary pixel data.
+    if (pos_ >= d_.size() || !std::isspace(static_cast<unsigned char>(d_[pos_])))
+      fail("truncated header (no pixel data after maxval)");
+    ++pos_;
+    GreyImage img;
+    img.width = w;
+    img.height = h;
+    img.channels = channels;
+    const uint64_t n = w * h * channels;
+    img.sums.resize(w * h);
+    auto scale = [&](uint64_t v) -> uint16_t {
+      return static_cast<uint16_t>(maxval == 255 ? v : (v * 255 + maxval / 2) / maxval);
+    };
+    if (!ascii) {
+      const uint64_t avail = d_.size() - pos_;
+      if (avail < n)
+        fail("truncated pixel data: " + std::to_string(avail) + " bytes, expected " +
+             std::to_string(w) + " x " + std::to_string(h) + (channels == 3 ? " x 3" : "") + " = " +
+             std::to_string(n));
+      const auto* p = reinterpret_cast<const unsigned char*>(d_.data() + pos_);
+      for (uint64_t i = 0; i < w * h; ++i) {
+        uint16_t s = 0;
+        for (int c = 0; c < channels; ++c) {
+          const unsigned v = p[i * channels + c];
+          if (v > maxval)
+            fail("pixel value " + std::to_string(v) + " > maxval " + std::to_string(maxval));
+          s += scale(v);
+        }
+        img.sums[i] = s;
+      }
+    } else {
+      for (uint64_t i = 0; i < w * h; ++i) {
+        uint16_t s = 0;
+        for (int c = 0; c < channels; ++c) {
+          skipBlanks();
+          if (pos_ >= d_.size())
+            fail("truncated pixel data: " + std::to_string(i) + " of " + std::to_string(w * h) +
+                 " pixels");
+          const uint64_t v = number("pixel value");
+          if (v > maxval)
+            fail("pixel value " + std::to_string(v) + " > maxval " + std::to_string(maxval));
+          s += scale(v);
+        }
+        img.sums[i] = s;
+      }
+    }
+    return img;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(path_ + ": " + what); }
+  void skipBlanks() {
+    while (pos_ < d_.size()) {
+      const char c = d_[pos_];
+      if (c == '#') {
+        while (pos_ < d_.size() && d_[pos_] != '\n') ++pos_;
+      } else if (std::isspace(static_cast<unsigned char>(c))) {
+        ++pos_;
+      } else {
+        break;
+      }
+    }
+  }
+  uint64_t number(const char* what) {
+    uint64_t v = 0;
+    size_t digits = 0;
+    while (pos_ < d_.size() && std::isdigit(static_cast<unsigned char>(d_[pos_]))) {
+      v = v * 10 + static_cast<uint64_t>(d_[pos_++] - '0');
+      if (++digits > 12) fail(std::string("absurd ") + what);
+    }
+    if (digits == 0)
+      fail(std::string("bad ") + what + " (expected a number" +
+           (pos_ < d_.size() ? ", got '" + std::string(1, d_[pos_]) + "'" : ", got end of file") +
+           ")");
+    return v;
+  }
+  uint64_t headerNumber(const char* what) {
+    skipBlanks();
+    if (pos_ >= d_.size()) fail(std::string("truncated header (no ") + what + ")");
+    return number(what);
+  }
+
+  std::string path_;
+  const std::string& d_;
+  size_t pos_ = 0;
+};
+
+GreyImage decodeWithOpenCv(const std::string& path) {
+  mrpt::img::CImage img;
+  bool ok = false;
+  try {
+    ok = img.loadFromFile(path, 1);  // 3 channels, the alpha channel dropped
+  } catch (const std::exception&) {
+    ok = false;
+  }
+  if (!ok || img.getWidth() == 0 || img.getHeight() == 0)
+    throw InputError(path + ": cannot decode the image (corrupt or truncated?)");
+  GreyImage out;
+  out.width = img.getWidth();
+  out.height = img.getHeight();
+  out.channels = img.channelCount() >= 3 ? 3 : 1;
+  out.sums.resize(out.width * out.height);
+  for (size_t r = 0; r < out.height; ++r) {
+    const uint8_t* row = img.ptrLine<uint8_t>(r);
+    for (size_t c = 0; c < out.width; ++c) {
+      uint16_t s = 0;
+      for (int k = 0; k < out.channels; ++k) s += row[c * out.channels + k];
+      out.sums[r * out.width + c] = s;
+    }
+  }
+  return out;
+}
+
+// Reads everything a map_server YAML entry refers to as a number.
+double yamlNumber(const std::map<std::string, YamlValue>& y, const std::string& key,
+                  const YamlError& err, std::optional<double> fallback) {
+  const auto it = y.find(key);
+  if (it == y.end()) {
+    if (fallback) return *fallback;
+    err.file("missing key '" + key + "' (a map_server YAML needs image, resolution and origin)");
+  }
+  const YamlValue& v = it->second;
+  double d = 0;
+  if (v.is_list || v.is_nested || !parseDouble(v.scalar, d))
+    err.at(v.line, "'" + key + "' must be a number, got " +
+                       (v.is_list     ? std::string("a list")
+                        : v.is_nested ? std::string("a mapping")
+                                      : "'" + v.scalar + "'"));
+  return d;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------ public
+
+RosMapYaml readRosMapYaml(const std::string& yaml_path) {
+  const YamlError err(yaml_path);
+  const std::string text = readWholeFile(yaml_path, "a ROS map YAML file");
+  const auto y = parseFlatYaml(yaml_path, text);
+  if (y.empty())
+    err.file(std::string(text.empty() ? "empty file" : "empty file (only blanks and comments)") +
+             ", expected a ROS map_server YAML (image, resolution, origin)");
+
+  RosMapYaml m;
+  m.yaml_path = yaml_path;
+
+  const auto img = y.find("image");
+  if (img == y.end())
+    err.file("missing key 'image' (a map_server YAML needs image, resolution and origin)");
+  if (img->second.is_list || img->second.is_nested || img->second.scalar.empty())
+    err.at(img->second.line, "'image' must be a file name");
+  m.image = img->second.scalar;
+  const fs::path ip(m.image);
+  m.image_path = ip.is_absolute()
+                     ? ip.string()
+                     : (fs::path(yaml_path).parent_path() / ip).lexically_normal().string();
+  if (m.image_path.empty()) m.image_path = m.image;
+  std::error_code ec;
+  if (!fs::is_regular_file(m.image_path, ec))
+    err.at(img->second.line, "image '" + m.image + "' not found (looked for " + m.image_path + ")");
+
+  m.resolution = yamlNumber(y, "resolution", err, std::nullopt);
+  if (!(m.resolution > 0))
+    err.at(y.at("resolution").line,
+           "'resolution' must be > 0 metres per pixel, got " + y.at("resolution").scalar);
+
+  const auto org = y.find("origin");
+  if (org == y.end())
+    err.file("missing key 'origin' (a map_server YAML needs image, resolution and origin)");
+  {
+    const YamlValue& v = org->second;
+    double xyz[3];
+    bool ok = v.is_list && v.items.size() == 3;
+    for (size_t i = 0; ok && i < 3; ++i) ok = parseDouble(v.items[i], xyz[i]);
+    if (!ok) {
+      std::string got = v.scalar;
+      if (v.is_list) {
+        got = "[";
+        for (size_t i = 0; i < v.items.size(); ++i) got += (i ? ", " : "") + v.items[i];
+        got += "]";
+      }
+      err.at(v.line, "'origin' must be a list of 3 numbers [x, y, yaw], got " +
+                         (v.is_nested ? std::string("a mapping") : got));
+    }
+    m.origin_x = xyz[0];
+    m.origin_y = xyz[1];
+    m.origin_yaw = xyz[2];
+  }
+
+  if (const auto it = y.find("negate"); it != y.end()) {
+    const std::string s = toLower(it->second.scalar);
+    if (s == "0" || s == "false")
+      m.negate = false;
+    else if (s == "1" || s == "true")
+      m.negate = true;
+    else
+      err.at(it->second.line, "'negate' must be 0 or 1, got '" + it->second.scalar + "'");
+  }
+  m.thresholds.occupied = yamlNumber(y, "occupied_thresh", err, 0.65);
+  m.thresholds.free = yamlNumber(y, "free_thresh", err, 0.196);
+  auto lineOf = [&](const char* k) { return y.count(k) ? y.at(k).line : 0; };
+  if (m.thresholds.occupied < 0 || m.thresholds.occupied > 1)
+    err.at(lineOf("occupied_thresh"), "'occupied_thresh' must be in [0, 1]");
+  if (m.thresholds.free < 0 || m.thresholds.free > 1)
+    err.at(lineOf("free_thresh"), "'free_thresh' must be in [0, 1]");
+  if (m.thresholds.free > m.thresholds.occupied)
+    err.at(std::max(lineOf("free_thresh"), lineOf("occupied_thresh")),
+           "'free_thresh' must not exceed 'occupied_thresh'");
+  if (const auto it = y.find("mode"); it != y.end()) {
+    const std::string s = toLower(it->second.scalar);
+    if (s == "trinary")
+      m.mode = RosMapMode::Trinary;
+    else if (s == "scale")
+      m.mode = RosMapMode::Scale;
+    else if (s == "raw")
+      m.mode = RosMapMode::Raw;
+    else
+      err.at(it->second.line,
+             "'mode' must be trinary, scale or raw, got '" + it->second.scalar + "'");
+  }
+  return m;
+}
+
+GreyImage readImageGrey(const std::string& path) {
+  const std::string data = readWholeFile(path, "an image");
+  if (data.empty()) throw InputError(path + ": empty file, expected an image");
+  const std::string ext = toLower(fs::path(path).extension().string());
+  const bool pnm_ext = ext == ".pgm" || ext == ".ppm" || ext == ".pnm";
+  if (data.size() >= 2 && data[0] == 'P' &&
+      (data[1] == '2' || data[1] == '3' || data[1] == '5' || data[1] == '6'))
+    return PnmParser(path, data).parse();
+  auto magicText = [&] {
+    std::string m;
+    for (size_t i = 0; i < std::min<size_t>(4, data.size()); ++i) {
+      const unsigned char c = data[i];
+      m += (c >= 0x20 && c < 0x7f) ? std::string(1, static_cast<char>(c)) : std::string("?");
+    }
+    return m;
+  };
+  if (pnm_ext ||
+      (data.size() >= 2 && data[0] == 'P' && std::isdigit(static_cast<unsigned char>(data[1]))))
+    throw InputError(path + ": bad magic '" + magicText() +
+                     "', expected a PGM (P5 or P2) or PPM (P6 or P3) image");
+  static const char kPng[] = "\x89PNG\r\n\x1a\n";
+  const bool png = data.compare(0, 8, std::string(kPng, 8)) == 0;
+  if (ext == ".png" && !png)
+    throw InputError(path + ": bad magic '" + magicText() + "', not a PNG image");
+  // Caught here, a cut PNG gets a clear message (libpng would only complain
+  // on stderr): its last chunk, IEND, is missing.
+  if (png && data.find("IEND", data.size() > 64 ? data.size() - 64 : 0) == std::string::npos)
+    throw InputError(path + ": truncated PNG (no IEND chunk at the end); cannot decode the image");
+  return decodeWithOpenCv(path);
+}
+
+COccupancyGridMap2D gridFromImage(const GreyImage& img, const ImageGridOptions& o) {
+  if (!(o.resolution > 0) || !std::isfinite(o.resolution))
+    throw InputError("image resolution must be > 0 metres per pixel");
+  const size_t w = img.width, h = img.height;
+  using Cell = COccupancyGridMap2D::cellType;
+  const Cell occupied = COccupancyGridMap2D::p2l(0.0f);
+  const Cell freec = COccupancyGridMap2D::p2l(1.0f);
+  const Cell unknown = COccupancyGridMap2D::p2l(0.5f);
+  const OccupancyThresholds& t = o.thresholds;
+  // Cell value of every pixel, in image order (row 0 at the top).
+  auto cellOf = [&](size_t i) -> Cell {
+    double avg = static_cast<double>(img.sums[i]) / img.channels;
+    if (o.negate) avg = 255.0 - avg;
+    if (o.mode == RosMapMode::Raw) {
+      const auto v = static_cast<unsigned>(avg);  // map_server truncates too
+      return v <= 100 ? COccupancyGridMap2D::p2l(1.0f - v / 100.0f) : unknown;
+    }
+    const double occ = (255.0 - avg) / 255.0;
+    if (occ > t.occupied) return occupied;
+    if (occ < t.free) return freec;
+    if (o.mode == RosMapMode::Trinary || t.occupied <= t.free) return unknown;
+    const double ratio = (occ - t.free) / (t.occupied - t.free);
+    const double pct = 1.0 + 98.0 * ratio;
+    return COccupancyGridMap2D::p2l(static_cast<float>(1.0 - pct / 100.0));
+  };
+
+  const double yaw = o.origin_yaw;
+  if (std::abs(yaw) < 1e-12) {
+    COccupancyGridMap2D g = makeGrid(o.origin_x, o.origin_y, o.resolution, w, h);
+    for (size_t r = 0; r < h; ++r) {
+      Cell* row = g.getRow(static_cast<int>(h - 1 - r));  // image top = highest y
+      for (size_t c = 0; c < w; ++c) row[c] = cellOf(r * w + c);
+    }
+    return g;
+  }
+  // Rotated origin: resample into the axis-aligned box around the image,
+  // each cell taking the pixel under its centre.
+  const double cy = std::cos(yaw), sy = std::sin(yaw);
+  const double W = w * o.resolution, H = h * o.resolution;
+  double xs[4], ys[4];
+  const double lx[4] = {0, W, 0, W}, ly[4] = {0, 0, H, H};
+  for (int k = 0; k < 4; ++k) {
+    xs[k] = o.origin_x + cy * lx[k] - sy * ly[k];
+    ys[k] = o.origin_y + sy * lx[k] + cy * ly[k];
+  }
+  const double x0 = *std::min_element(xs, xs + 4), x1 = *std::max_element(xs, xs + 4);
+  const double y0 = *std::min_element(ys, ys + 4), y1 = *std::max_element(ys, ys + 4);
+  const auto nx = static_cast<size_t>(std::ceil((x1 - x0) / o.resolution - 1e-9));
+  const auto ny = static_cast<size_t>(std::ceil((y1 - y0) / o.resolution - 1e-9));
+  COccupancyGridMap2D g =
+      makeGrid(x0, y0, o.resolution, std::max<size_t>(nx, 1), std::max<size_t>(ny, 1));
+  for (size_t j = 0; j < g.getSizeY(); ++j) {
+    Cell* row = g.getRow(static_cast<int>(j));
+    const double y = y0 + (j + 0.5) * o.resolution - o.origin_y;
+    for (size_t i = 0; i < g.getSizeX(); ++i) {
+      const double x = x0 + (i + 0.5) * o.resolution - o.origin_x;
+      const double u = (cy * x + sy * y) / o.resolution;   // image column
+      const double v = (-sy * x + cy * y) / o.resolution;  // image row from the bottom
+      if (u < 0 || v < 0 || u >= w || v >= h) continue;
+      const auto c = static_cast<size_t>(u), rb = static_cast<size_t>(v);
+      row[i] = cellOf((h - 1 - rb) * w + c);
+    }
+  }
+  return g;
+}
+
+COccupancyGridMap2D readRosMap(const std::string& yaml_path) {
+  const RosMapYaml y = readRosMapYaml(yaml_path);
+  ImageGridOptions o;
+  o.resolution = y.resolution;
+  o.origin_x = y.origin_x;
+  o.origin_y = y.origin_y;
+  o.origin_yaw = y.origin_yaw;
+  o.negate = y.negate;
+  o.thresholds = y.thresholds;
+  o.mode = y.mode;
+  GreyImage img;
+  try {
+    img = readImageGrey(y.image_path);
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) + " (the image of " + yaml_path + ")");
+  }
+  return gridFromImage(img, o);
+}
+
+void writeRosMap(const COccupancyGridMap2D& map, const std::string& yaml_path,
+                 const RosMapWriteOptions& options) {
+  map_detail::requireParentFolder(yaml_path);
+  const size_t w = map.getSizeX(), h = map.getSizeY();
+  if (w == 0 || h == 0) throw InputError(yaml_path + ": the map has no cells to write");
+  const fs::path yp(yaml_path);
+  const std::string image_name =
+      options.image_name.empty() ? yp.stem().string() + ".pgm" : options.image_name;
+  const std::string image_path = (yp.parent_path() / image_name).string();
+  const OccupancyThresholds& t = options.thresholds;
+
+  // map_saver: black occupied, white (254) free, grey 205 unknown; top row first.
+  std::string pgm;
+  char header[128];
+  std::snprintf(header, sizeof header, "P5\n# CREATOR: carenav %.3f m/pix\n%zu %zu\n255\n",
+                map.getResolution(), w, h);
+  pgm = header;
+  const size_t head = pgm.size();
+  pgm.resize(head + w * h);
+  for (size_t r = 0; r < h; ++r) {
+    const size_t cy = h - 1 - r;
+    for (size_t cx = 0; cx < w; ++cx) {
+      const float p = map.getCell(static_cast<int>(cx), static_cast<int>(cy));
+      const CellClass k = classifyCell(p, t);
+      pgm[head + r * w + cx] = static_cast<char>(k == CellClass::Occupied ? 0
+                                                 : k == CellClass::Free   ? 254
+                                                                          : 205);
+    }
+  }
+  std::string yaml = "image: " + image_name + "\n";
+  yaml += "resolution: " + map_detail::floatText(map.getResolution()) + "\n";
+  yaml += "origin: [" + map_detail::floatText(map.getXMin()) + ", " +
+          map_detail::floatText(map.getYMin()) + ", 0.0]\n";
+  yaml += "negate: 0\n";
+  char th[96];
+  std::snprintf(th, sizeof th, "occupied_thresh: %.15g\nfree_thresh: %.15g\n", t.occupied, t.free);
+  yaml += th;
+
+  auto put = [](const std::string& path, const std::string& bytes) {
+    std::ofstream f(path, std::ios::binary);
+    f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    f.flush();
+    if (!f) throw std::runtime_error(path + ": cannot write");
+  };
+  map_detail::TempFile tpgm(image_path), tyaml(yaml_path);
+  put(tpgm.path(), pgm);
+  put(tyaml.path(), yaml);
+  // The image first: a YAML never names an image that is not there yet.
+  tpgm.commit();
+  tyaml.commit();
+}
+
+}  // namespace carenav::io
