@@ -1,0 +1,77 @@
+// carenav import carmen LOG[.gz] --out X.rawlog [--tum F | --no-tum] [--odometry SRC]
+#include "commands.h"
+
+#include <carenav/common/errors.h>
+#include <carenav/io/carmen.h>
+
+#include <iostream>
+
+namespace carenav::app {
+
+namespace {
+void addImportCarmen(CLI::App& import_cmd, const GlobalOptions& g) {
+  struct Args {
+    io::CarmenImportOptions opt;
+    std::string odometry = "auto";
+    bool no_tum = false;
+    bool json = false;
+    bool quiet = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = import_cmd.add_subcommand(
+      "carmen",
+      "Convert a CARMEN log (.log/.clf, plain or .gz; FLASER, RLASER, LASER3/4, RAWLASERk, "
+      "ROBOTLASERk, ODOM, PARAM) to an MRPT rawlog (observation-only form, gzip) with the log's "
+      "own timestamps, plus the robot poses of the log as a TUM trajectory (X.rawlog -> X.tum). "
+      "Unknown message types are skipped and counted. A malformed line stops the import with "
+      "exit 2 naming FILE:LINE; what was converted before it is written.");
+  cmd->add_option("log", a->opt.input, "CARMEN log file (plain or gzip)")->required();
+  cmd->add_option("-o,--out", a->opt.output,
+                  "Rawlog to write (gzip-compressed whatever the name; written atomically)")
+      ->required();
+  auto* tum = cmd->add_option("--tum", a->opt.tum,
+                              "TUM trajectory to write (default: --out with .tum instead of "
+                              ".rawlog[.gz]); for corrected logs it is the SLAM reference");
+  cmd->add_flag("--no-tum", a->no_tum, "Write no TUM trajectory")->excludes(tum);
+  cmd->add_option("--odometry", a->odometry,
+                  "Odometry source: auto (laser messages if they carry odometry, else ODOM "
+                  "lines), laser (FLASER/RLASER odom fields, ROBOTLASER robot_pose: one reading "
+                  "per scan at its time), odom (ODOM lines), none")
+      ->check(CLI::IsMember({"auto", "laser", "odom", "none"}))
+      ->capture_default_str();
+  cmd->add_option("--max-range", a->opt.max_range,
+                  "Maximum range in m for every scan; readings at or beyond it are invalid "
+                  "(default 0: from the log, else 80 m)")
+      ->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--compression", a->opt.compression, "gzip level of the rawlog, 1..9")
+      ->check(CLI::Range(1, 9))
+      ->capture_default_str();
+  cmd->add_flag("--json", a->json, "Print the summary as JSON");
+  cmd->add_flag("-q,--quiet", a->quiet, "No progress and no notes on stderr (same as carenav -q)");
+  cmd->footer(
+      "Example:\n"
+      "  carenav import carmen intel-corrected.log.gz --out intel.rawlog\n"
+      "  carenav rawlog info intel.rawlog\n"
+      "See docs/import.md.");
+  cmd->callback([a, &g] {
+    const bool quiet = g.quiet || a->quiet;
+    a->opt.odometry = io::parseCarmenOdometry(a->odometry);
+    a->opt.write_tum = !a->no_tum;
+    a->opt.progress = !quiet;
+    auto report = [&](const io::CarmenImportStats& st) {
+      std::cout << (a->json ? st.toJson() : st.toText()) << std::flush;
+      if (!quiet) std::cerr << st.notesText() << std::flush;
+    };
+    try {
+      report(io::importCarmen(a->opt));
+    } catch (const io::CarmenImportError& e) {
+      report(e.stats);  // what was written before the bad line
+      throw;
+    }
+  });
+}
+}  // namespace
+
+CARENAV_IMPORT(addImportCarmen);
+
+}  // namespace carenav::app
