@@ -192,11 +192,17 @@ TEST(Cli, ProfileErrorsExitTwoNamingTheKey) {
   EXPECT_NE(r.err.find(bad.string() + ":2: [robot] vmax: unknown key"), std::string::npos) << r.err;
 }
 
-TEST(Cli, DemoSummarisesTheSenaRawlog) {
-  const RunResult r = carenav({"demo"});
+TEST(Cli, DemoSummarisesTheSenaRawlogAndMapsIt) {
+  const auto out = scratch() / "demo";
+  const RunResult r = carenav({"demo", "--out", out.string()});
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("entries:            449"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("SENA"), std::string::npos);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.out, m, std::regex("(\\d+) loop closures"))) << r.out;
+  EXPECT_GT(std::stoi(m[1]), 0);
+  for (const char* f : {"map.png", "map.yaml", "map.pgm", "map.gridmap.gz", "trajectory.tum"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
   // Without MRPT's datasets the demo says what to install, exit 2.
   const RunResult none = shell("CARENAV_MRPT_DATASETS=/nonexistent " + quote(kBin) + " demo");
   EXPECT_EQ(none.code, 2);

@@ -1,5 +1,6 @@
 #include <carenav/common/json.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -106,10 +107,11 @@ JsonWriter& JsonWriter::value(double v) {
     out_ += "null";
     return *this;
   }
-  std::ostringstream os;
-  os.precision(12);
-  os << v;
-  out_ += os.str();
+  // Shortest text that reads back as the same double: UNIX times keep
+  // their microseconds, 0.1 stays 0.1.
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out_.append(buf, r.ptr);
   return *this;
 }
 

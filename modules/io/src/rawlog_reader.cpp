@@ -29,7 +29,8 @@ class RawlogReader::CountingStream : public mrpt::io::CStream {
     if (!gz_.open(path, err)) throw InputError(path + ": cannot open the rawlog: " + err);
   }
   size_t Read(void* buf, size_t n) override {
-    const size_t r = gz_.Read(buf, n);
+    size_t r = gz_.Read(buf, n);
+    if (r > n) r = 0;  // zlib's error (-1) comes back as a huge size_t
     count_ += r;
     if (r < n) short_read_ = true;
     return r;

@@ -16,8 +16,8 @@ const ParamTable<SlamParams>& SlamParams::table() {
                 "use odometry as the motion prior (false: laser only)")
           .real("localization_lin_distance", &SlamParams::localization_lin_distance, "m", 0, 10,
                 "robot motion between ICP pose corrections")
-          .real("localization_ang_distance", &SlamParams::localization_ang_distance, "deg", 0,
-                180, "robot turn between ICP pose corrections")
+          .real("localization_ang_distance", &SlamParams::localization_ang_distance, "deg", 0, 180,
+                "robot turn between ICP pose corrections")
           .real("insertion_lin_distance", &SlamParams::insertion_lin_distance, "m", 0, 10,
                 "robot motion between scans inserted in the map")
           .real("insertion_ang_distance", &SlamParams::insertion_ang_distance, "deg", 0, 180,
@@ -58,8 +58,6 @@ const ParamTable<IcpParams>& IcpParams::table() {
                 "factor shrinking the thresholds after each convergence")
           .real("smallestThresholdDist", &IcpParams::smallestThresholdDist, "m", 0.001, 10,
                 "smallest pairing distance")
-          .flag("onlyClosestCorrespondences", &IcpParams::onlyClosestCorrespondences,
-                "pair each point with its closest neighbour only")
           .flag("onlyUniqueRobust", &IcpParams::onlyUniqueRobust,
                 "force unique correspondences both ways")
           .integer("corresponding_points_decimation", &IcpParams::corresponding_points_decimation,
@@ -67,10 +65,37 @@ const ParamTable<IcpParams>& IcpParams::table() {
   return t;
 }
 
+const ParamTable<RbpfParams>& RbpfParams::table() {
+  static const auto t =
+      ParamTable<RbpfParams>()
+          .choice("proposal", &RbpfParams::proposal, {"standard", "optimal", "auxiliary-optimal"},
+                  "particle proposal: odometry only, or refined by the scan (gmapping-like)")
+          .integer("particles", &RbpfParams::particles, "", 1, 5000, "number of particles")
+          .real("resample_ess", &RbpfParams::resample_ess, "", 0, 1,
+                "resample when the effective sample size ratio falls below")
+          .real("lf_std_hit", &RbpfParams::lf_std_hit, "m", 0.005, 5,
+                "likelihood-field standard deviation of a hit")
+          .real("lf_max_range", &RbpfParams::lf_max_range, "m", 0.5, 200,
+                "longest range the likelihood uses")
+          .real("localize_lin_distance", &RbpfParams::localize_lin_distance, "m", 0, 10,
+                "motion between filter updates")
+          .real("localize_ang_distance", &RbpfParams::localize_ang_distance, "deg", 0, 180,
+                "turn between filter updates");
+  return t;
+}
+
+std::string IcpParams::asMrptIni(const std::string& section) const {
+  std::string s = "[" + section + "]\n";
+  for (const auto& spec : table().specs())
+    s += spec.key + " = " + table().get(*this, spec.key) + "\n";
+  return s;
+}
+
 void registerProfileSections() {
   auto& reg = ProfileSchemas::instance();
   reg.add(SectionSchema::of(SlamParams::table(), "slam", "map building from rawlogs"));
   reg.add(SectionSchema::of(IcpParams::table(), "icp", "ICP scan matcher (MRPT CICP names)"));
+  reg.add(SectionSchema::of(RbpfParams::table(), "rbpf", "Rao-Blackwellised particle filter SLAM"));
 }
 
 }  // namespace carenav::slam

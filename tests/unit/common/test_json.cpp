@@ -20,3 +20,9 @@ TEST(Json, WritesNestedStructuresCompact) {
 TEST(Json, EscapesControlAndQuotes) {
   EXPECT_EQ(JsonWriter::escape("a\"b\\c\n\x01"), R"("a\"b\\c\n\u0001")");
 }
+
+TEST(Json, NumbersReadBackExactly) {
+  JsonWriter j(false);
+  j.beginArray().value(1137834225.973759).value(0.1).value(1e-300).endArray();
+  EXPECT_EQ(j.str(), "[1137834225.973759,0.1,1e-300]");
+}

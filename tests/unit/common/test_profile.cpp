@@ -13,7 +13,7 @@ namespace fs = std::filesystem;
 namespace {
 const std::string kIni = std::string(CARENAV_SOURCE_DIR) + "/ini/";
 
-/** A scratch folder with a copy of defaults.ini, for hand-made profiles. */
+/** A scratch folder with a defaults.ini, for hand-made profiles. */
 class ProfileFiles : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -21,8 +21,9 @@ class ProfileFiles : public ::testing::Test {
            ("carenav_profile_" + std::to_string(::getpid()) + "_" +
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
-    fs::copy_file(kIni + "defaults.ini", dir_ / "defaults.ini",
-                  fs::copy_options::overwrite_existing);
+    // A base of common sections only (the shipped defaults.ini also holds
+    // module sections, which test_common does not link).
+    write("defaults.ini", "[profile]\nname = defaults\n[robot]\nv_max = 0.3\nw_max = 0.75\n");
   }
   void TearDown() override { fs::remove_all(dir_); }
   std::string write(const std::string& name, const std::string& text) {
@@ -56,7 +57,10 @@ TEST(Profile, EveryShippedProfileLoadsAndValidates) {
   for (const char* name : {"isr-aiwalker", "interbot", "hobbit"}) {
     SCOPED_TRACE(name);
     const Profile p = Profile::load(kIni + name + ".ini");
-    EXPECT_NO_THROW(p.validate());
+    // Module sections ([slam], ...) are checked where their modules are
+    // linked (the CLI tests); here every common section must be clean.
+    for (const auto& issue : p.check())
+      EXPECT_TRUE(issue.message.rfind("unknown section", 0) == 0) << issue.text();
     EXPECT_EQ(p.files().size(), 2u);  // defaults.ini, then the robot
     const auto robot = p.section<RobotParams>("robot");
     EXPECT_GT(robot.v_max, 0);

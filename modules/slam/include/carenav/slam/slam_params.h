@@ -16,9 +16,9 @@ namespace carenav::slam {
  *  ```
  */
 struct SlamParams {
-  std::string method = "icp-graph";  ///< icp | icp-graph | rbpf
-  std::string sensor;                ///< sensorLabel of the 2D scans to map with ("" any)
-  bool use_odometry = true;          ///< false: laser only (odometry ignored)
+  std::string method = "icp-graph";        ///< icp | icp-graph | rbpf
+  std::string sensor;                      ///< sensorLabel of the 2D scans to map with ("" any)
+  bool use_odometry = true;                ///< false: laser only (odometry ignored)
   double localization_lin_distance = 0.2;  ///< m, robot motion between ICP corrections
   double localization_ang_distance = 5;    ///< deg
   double insertion_lin_distance = 0.5;     ///< m, motion between scans inserted in the map
@@ -27,12 +27,12 @@ struct SlamParams {
   double grid_resolution = 0.05;           ///< m, cell size of the output occupancy grid
   double scan_range_max = 0;               ///< m, drop longer ranges (0: keep the scan's own)
   // icp-graph only
-  double keyframe_distance = 0.5;       ///< m, motion between keyframes (pose-graph nodes)
-  double keyframe_angle = 20;           ///< deg
-  double loop_search_radius = 4.0;      ///< m, keyframes this close are loop candidates
-  int loop_min_separation = 20;         ///< keyframes between a candidate and the current one
-  double loop_min_goodness = 0.8;       ///< [0,1] ICP quality to accept a loop closure
-  double loop_max_correction = 3.0;     ///< m, largest loop-closure correction accepted
+  double keyframe_distance = 0.5;    ///< m, motion between keyframes (pose-graph nodes)
+  double keyframe_angle = 20;        ///< deg
+  double loop_search_radius = 4.0;   ///< m, keyframes this close are loop candidates
+  int loop_min_separation = 20;      ///< keyframes between a candidate and the current one
+  double loop_min_goodness = 0.8;    ///< [0,1] ICP quality to accept a loop closure
+  double loop_max_correction = 3.0;  ///< m, largest loop-closure correction accepted
   static const ParamTable<SlamParams>& table();
 };
 
@@ -41,17 +41,31 @@ struct SlamParams {
 struct IcpParams {
   std::string ICP_algorithm = "icpClassic";  ///< icpClassic | icpLevenbergMarquardt
   int maxIterations = 80;
-  double thresholdDist = 0.3;       ///< m, initial pairing distance
-  double thresholdAng_DEG = 5;      ///< deg, pairing distance growth with range
-  double ALFA = 0.8;                ///< threshold shrink factor after convergence
+  double thresholdDist = 0.3;           ///< m, initial pairing distance
+  double thresholdAng_DEG = 5;          ///< deg, pairing distance growth with range
+  double ALFA = 0.8;                    ///< threshold shrink factor after convergence
   double smallestThresholdDist = 0.05;  ///< m
-  bool onlyClosestCorrespondences = true;
   bool onlyUniqueRobust = true;
   int corresponding_points_decimation = 5;
   static const ParamTable<IcpParams>& table();
+  /** The values as an MRPT [section] that CICP::TConfigParams reads. */
+  std::string asMrptIni(const std::string& section) const;
 };
 
-/** Registers [slam] and [icp] with the profile schemas. */
+/** [rbpf]: the Rao-Blackwellised particle filter of MRPT's
+ *  CMetricMapBuilderRBPF (grid maps, gmapping-like optimal proposal). */
+struct RbpfParams {
+  std::string proposal = "optimal";    ///< standard | optimal | auxiliary-optimal
+  int particles = 20;                  ///< sample size (fixed)
+  double resample_ess = 0.5;           ///< resample when ESS / N falls below
+  double lf_std_hit = 0.2;             ///< m, likelihood-field sigma
+  double lf_max_range = 30;            ///< m, ranges used by the likelihood
+  double localize_lin_distance = 0.4;  ///< m, motion between filter updates
+  double localize_ang_distance = 20;   ///< deg
+  static const ParamTable<RbpfParams>& table();
+};
+
+/** Registers [slam], [icp] and [rbpf] with the profile schemas. */
 void registerProfileSections();
 
 }  // namespace carenav::slam

@@ -1,0 +1,275 @@
+// "icp-graph": ICP scan-to-submap odometry, keyframes, loop closure by
+// proximity and scan-match quality, and a pose graph optimised with MRPT's
+// sparse Levenberg-Marquardt (optimize_graph_spa_levmarq, header-only use).
+// The map is rebuilt from the optimised keyframes, so the loop closes in the
+// map as well as in the trajectory; MRPT's icp-slam cannot do that.
+#include <carenav/slam/mapper.h>
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/graphs/CNetworkOfPoses.h>
+#include <mrpt/graphslam/levmarq.h>
+#include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/poses/CPose3DPDFGaussian.h>
+#include <mrpt/poses/CPosePDFGaussian.h>
+#include <mrpt/poses/CPosePDFGaussianInf.h>
+#include <mrpt/slam/CICP.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace carenav::slam {
+
+namespace {
+
+using mrpt::maps::CSimplePointsMap;
+using mrpt::poses::CPose2D;
+
+constexpr double kDeg = M_PI / 180;
+constexpr size_t kSubmapKeyframes = 10;  // keyframes the scan-to-submap ICP uses
+constexpr size_t kLoopNeighbours = 2;    // keyframes each side in a loop candidate's submap
+constexpr size_t kLoopTries = 3;         // nearest candidates tried per keyframe
+
+struct Keyframe {
+  CPose2D pose;  // current estimate, world frame
+  mrpt::obs::CObservation2DRangeScan::Ptr scan;
+  std::shared_ptr<CSimplePointsMap> points;  // in the keyframe's frame
+  bool fixed = false;                        // from a resumed map: not optimised
+};
+
+struct ScanRecord {
+  double time;
+  size_t keyframe;  // the keyframe the scan is expressed against
+  CPose2D rel;      // scan pose in that keyframe's frame
+};
+
+mrpt::poses::CPosePDFGaussianInf edge(const CPose2D& rel, double sxy, double sth) {
+  mrpt::poses::CPosePDFGaussianInf e;
+  e.mean = rel;
+  e.cov_inv.setZero();
+  e.cov_inv(0, 0) = e.cov_inv(1, 1) = 1 / (sxy * sxy);
+  e.cov_inv(2, 2) = 1 / (sth * sth);
+  return e;
+}
+
+class GraphMapper : public Mapper {
+ public:
+  explicit GraphMapper(const MapperConfig& cfg) : cfg_(cfg) {
+    mrpt::config::CConfigFileMemory icp(cfg.mrpt_ini ? std::string() : cfg.icp.asMrptIni("ICP"));
+    icp_.options.loadFromConfigFile(cfg.mrpt_ini ? *cfg.mrpt_ini : icp, "ICP");
+    icp_.options.skip_cov_calculation = false;
+    insert_opts_.minDistBetweenLaserPoints = 0.05f;
+    insert_opts_.isPlanarMap = true;
+    if (cfg.resume_map) resume(*cfg.resume_map);
+    if (cfg.start_pose) pose_ = *cfg.start_pose;
+  }
+
+  void process(const ScanStep& step) override {
+    ++stats_.scans;
+    auto scan = clipScan(step.scan, cfg_.slam.scan_range_max);
+    auto local = std::make_shared<CSimplePointsMap>();
+    local->insertionOptions = insert_opts_;
+    local->insertObservation(*scan);
+
+    const CPose2D guess =
+        (cfg_.slam.use_odometry && step.odometry) ? *step.odometry : last_increment_;
+    const CPose2D before = pose_;
+    bool matched = false;
+    if (keyframes_.empty()) {
+      // first scan: the start pose
+    } else if (local->size() < 10) {
+      pose_ = pose_ + guess;  // nothing to match: dead reckoning
+    } else {
+      const CPose2D predicted = pose_ + guess;
+      mrpt::slam::CICP::TReturnInfo info;
+      auto pdf = icp_.Align(&submap_, local.get(), predicted, info);
+      if (info.goodness >= cfg_.slam.min_icp_goodness) {
+        pose_ = pdf->getMeanVal();
+        pdf->getCovariance(last_cov_);
+        matched = true;
+        ++stats_.icp_accepted;
+      } else {
+        pose_ = predicted;
+        ++stats_.icp_rejected;
+      }
+    }
+    if (!keyframes_.empty()) last_increment_ = pose_ - before;
+
+    if (needKeyframe()) addKeyframe(scan, local, matched);
+    const size_t k = keyframes_.size() - 1;
+    records_.push_back({step.time, k, pose_ - keyframes_[k].pose});
+  }
+
+  void finish() override {
+    if (stats_.loop_closures > 0) optimise();
+  }
+
+  CPose2D pose() const override { return pose_; }
+  mrpt::math::CMatrixDouble33 covariance() const override { return last_cov_; }
+
+  mrpt::maps::CSimpleMap simpleMap() const override {
+    mrpt::maps::CSimpleMap m;
+    for (const auto& kf : keyframes_) {
+      auto sf = std::make_shared<mrpt::obs::CSensoryFrame>();
+      sf->insert(kf.scan);
+      auto pdf = std::make_shared<mrpt::poses::CPose3DPDFGaussian>(mrpt::poses::CPose3D(kf.pose));
+      m.insert(pdf, sf);
+    }
+    return m;
+  }
+
+  io::Trajectory2D trajectory() const override {
+    io::Trajectory2D t;
+    t.reserve(records_.size());
+    for (const auto& r : records_) {
+      const CPose2D p = keyframes_[r.keyframe].pose + r.rel;
+      t.push_back({r.time, p.x(), p.y(), p.phi()});
+    }
+    return t;
+  }
+
+  MapperStats stats() const override {
+    MapperStats s = stats_;
+    s.keyframes = keyframes_.size();
+    s.inserted = keyframes_.size();
+    return s;
+  }
+
+ private:
+  bool needKeyframe() const {
+    if (keyframes_.empty()) return true;
+    const CPose2D d = pose_ - keyframes_.back().pose;
+    return d.norm() >= cfg_.slam.keyframe_distance ||
+           std::abs(d.phi()) >= cfg_.slam.keyframe_angle * kDeg;
+  }
+
+  void addKeyframe(const mrpt::obs::CObservation2DRangeScan::Ptr& scan,
+                   const std::shared_ptr<CSimplePointsMap>& pts, bool matched) {
+    const size_t id = keyframes_.size();
+    keyframes_.push_back({pose_, scan, pts, false});
+    graph_.nodes[id] = pose_;
+    if (id > 0) {
+      const Keyframe& prev = keyframes_[id - 1];
+      // Scan-matched links are tight; dead-reckoned ones loose.
+      graph_.insertEdge(id - 1, id,
+                        matched ? edge(pose_ - prev.pose, 0.05, 1.0 * kDeg)
+                                : edge(pose_ - prev.pose, 0.3, 5.0 * kDeg));
+      if (tryLoopClosures(id)) optimise();
+    }
+    rebuildSubmap();
+  }
+
+  /** Points of keyframes [from, to] in the frame of keyframe `ref`. */
+  CSimplePointsMap pointsAround(size_t ref, size_t from, size_t to) const {
+    CSimplePointsMap m;
+    m.insertionOptions = insert_opts_;
+    for (size_t i = from; i <= to && i < keyframes_.size(); ++i) {
+      CSimplePointsMap p = *keyframes_[i].points;
+      p.changeCoordinatesReference(mrpt::poses::CPose3D(keyframes_[i].pose - keyframes_[ref].pose));
+      m.insertAnotherMap(&p, mrpt::poses::CPose3D());
+    }
+    return m;
+  }
+
+  bool tryLoopClosures(size_t k) {
+    const auto& s = cfg_.slam;
+    std::vector<std::pair<double, size_t>> cands;
+    for (size_t j = 0; j + static_cast<size_t>(s.loop_min_separation) < k; ++j) {
+      const double d = (keyframes_[j].pose - keyframes_[k].pose).norm();
+      if (d <= s.loop_search_radius) cands.emplace_back(d, j);
+    }
+    std::sort(cands.begin(), cands.end());
+    if (cands.size() > kLoopTries) cands.resize(kLoopTries);
+    bool any = false;
+    mrpt::slam::CICP loop_icp = icp_;
+    // Drift makes the first guess poorer than in odometry: start wider.
+    loop_icp.options.thresholdDist = std::max(icp_.options.thresholdDist, 1.0);
+    loop_icp.options.maxIterations = std::max(icp_.options.maxIterations, 100u);
+    for (const auto& [dist, j] : cands) {
+      ++stats_.loop_candidates;
+      const size_t from = j >= kLoopNeighbours ? j - kLoopNeighbours : 0;
+      const CSimplePointsMap ref = pointsAround(j, from, j + kLoopNeighbours);
+      const CPose2D guess = keyframes_[k].pose - keyframes_[j].pose;
+      mrpt::slam::CICP::TReturnInfo info;
+      auto pdf = loop_icp.Align(&ref, keyframes_[k].points.get(), guess, info);
+      const CPose2D rel = pdf->getMeanVal();
+      if (info.goodness < s.loop_min_goodness) continue;
+      if ((rel - guess).norm() > s.loop_max_correction) continue;
+      graph_.insertEdge(j, k, edge(rel, 0.05, 1.0 * kDeg));
+      ++stats_.loop_closures;
+      any = true;
+    }
+    return any;
+  }
+
+  void optimise() {
+    std::set<mrpt::graphs::TNodeID> free;
+    for (size_t i = 0; i < keyframes_.size(); ++i)
+      if (!keyframes_[i].fixed && i != graph_.root) free.insert(i);
+    if (free.empty()) return;
+    mrpt::graphslam::TResultInfoSpaLevMarq info;
+    mrpt::containers::yaml params = mrpt::containers::yaml::Map();
+    params["max_iterations"] = 100;
+    mrpt::graphslam::optimize_graph_spa_levmarq(graph_, info, &free, params);
+    ++stats_.optimisations;
+    const CPose2D last_before = keyframes_.back().pose;
+    for (size_t i = 0; i < keyframes_.size(); ++i) keyframes_[i].pose = graph_.nodes[i];
+    // The robot moves with its last keyframe.
+    pose_ = keyframes_.back().pose + (pose_ - last_before);
+  }
+
+  void rebuildSubmap() {
+    const size_t n = keyframes_.size();
+    const size_t from = n > kSubmapKeyframes ? n - kSubmapKeyframes : 0;
+    submap_ = CSimplePointsMap();
+    submap_.insertionOptions = insert_opts_;
+    for (size_t i = from; i < n; ++i) {
+      CSimplePointsMap p = *keyframes_[i].points;
+      p.changeCoordinatesReference(mrpt::poses::CPose3D(keyframes_[i].pose));
+      submap_.insertAnotherMap(&p, mrpt::poses::CPose3D());
+    }
+  }
+
+  void resume(const mrpt::maps::CSimpleMap& map) {
+    for (size_t i = 0; i < map.size(); ++i) {
+      const auto& [pdf, sf] = map.get(i);
+      if (!pdf || !sf) continue;
+      auto scan = sf->getObservationByClass<mrpt::obs::CObservation2DRangeScan>();
+      if (!scan) continue;
+      auto pts = std::make_shared<CSimplePointsMap>();
+      pts->insertionOptions = insert_opts_;
+      pts->insertObservation(*scan);
+      const CPose2D p(pdf->getMeanVal());
+      const size_t id = keyframes_.size();
+      keyframes_.push_back({p, scan, pts, true});
+      graph_.nodes[id] = p;
+      if (id > 0)
+        graph_.insertEdge(id - 1, id, edge(p - keyframes_[id - 1].pose, 0.01, 0.2 * kDeg));
+      pose_ = p;
+    }
+    rebuildSubmap();
+  }
+
+  MapperConfig cfg_;
+  mrpt::slam::CICP icp_;
+  CSimplePointsMap::TInsertionOptions insert_opts_;
+  std::vector<Keyframe> keyframes_;
+  std::vector<ScanRecord> records_;
+  mrpt::graphs::CNetworkOfPoses2DInf graph_;
+  CSimplePointsMap submap_;
+  CPose2D pose_, last_increment_;
+  mrpt::math::CMatrixDouble33 last_cov_ = [] {
+    mrpt::math::CMatrixDouble33 c;
+    c.setDiagonal(3, 1e-4);
+    return c;
+  }();
+  MapperStats stats_;
+};
+
+}  // namespace
+
+std::unique_ptr<Mapper> makeIcpGraphMapper(const MapperConfig& cfg) {
+  return std::make_unique<GraphMapper>(cfg);
+}
+
+}  // namespace carenav::slam

@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# Side by side, in one run: carenav slam against MRPT's own icp-slam and
+# rbpf-slam (headless settings) on the same rawlogs with the same settings.
+#   - SENA (MRPT's real loop, laser + odometry): wall time; final pose.
+#   - Intel and CSAIL (real CARMEN logs, laser only, SLAM-corrected
+#     reference trajectory): wall time and ATE/RPE against the reference.
+# carenav runs `icp` and `rbpf` with MRPT's own INI files (equivalent
+# settings: the same engine and parameters), `icp-graph` with the same [ICP]
+# values. Prints a table; numbers go to docs/BENCHMARKS.md.
+# Usage: tests/bench/compare_slam.sh [build-dir] [work-dir]
+set -euo pipefail
+build=$(realpath "${1:-build}")
+work=${2:-/tmp/carenav-bench-slam}
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+bin="$build/apps/carenav/carenav"
+data=${CARENAV_MRPT_DATASETS:-/usr/share/mrpt/datasets}
+cfg=/usr/share/mrpt/config_files
+shared="$root/../shared/data"
+[ -x "$bin" ] || { echo "build first: $bin not found" >&2; exit 2; }
+for t in icp-slam rbpf-slam rawlog-edit; do
+  command -v $t >/dev/null || { echo "$t missing: install mrpt-apps" >&2; exit 2; }
+done
+mkdir -p "$work"
+cd "$work"
+
+secs() {  # wall seconds of a command
+  local t0 t1
+  t0=$(date +%s%N)
+  "$@" >/dev/null 2>&1 || { echo "FAILED: $*" >&2; return 1; }
+  t1=$(date +%s%N)
+  awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.2f", (b - a) / 1e9 }'
+}
+ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a / b }'; }
+
+# MRPT app INI made headless: rawlog, output folder, no windows/images.
+headless() {  # template rawlog outdir > ini
+  sed -e "s|^rawlog_file=.*|rawlog_file=$2|" -e "s|^logOutput_dir=.*|logOutput_dir=$3|" \
+      -e 's|^SHOW_PROGRESS_3D_REAL_TIME=.*|SHOW_PROGRESS_3D_REAL_TIME=0|' \
+      -e 's|^SHOW_PROGRESS_IN_WINDOW=.*|SHOW_PROGRESS_IN_WINDOW=0|' \
+      -e 's|^SAVE_3D_SCENE=.*|SAVE_3D_SCENE=0|' -e 's|^SAVE_MAP_IMAGES=.*|SAVE_MAP_IMAGES=0|' \
+      -e 's|^SAVE_POSE_LOG=.*|SAVE_POSE_LOG=0|' -e 's|^LOG_FREQUENCY=.*|LOG_FREQUENCY=100000|' \
+      -e 's|^verbosity_level.*|verbosity_level = ERROR|' "$1"
+}
+
+# MRPT's log_estimated_path.txt (step x y phi) as TUM, stamped with the times
+# of carenav's trajectory of the same scans (both apps take one step per scan).
+mrpt_path_to_tum() {  # log_estimated_path.txt carenav.tum > out.tum
+  awk 'NR == FNR { if ($1 !~ /^#/) t[n++] = $1; next }
+       { if ($1 in t) printf "%s %s %s 0 0 0 %.9f %.9f\n", t[$1], $2, $3, sin($4 / 2), cos($4 / 2) }' \
+      "$2" "$1"
+}
+
+printf '%-8s %-22s %9s %9s %7s  %s\n' log method "carenav s" "MRPT s" ratio "final pose (carenav | MRPT)"
+row() { printf '%-8s %-22s %9s %9s %7s  %s\n' "$@"; }
+
+# ---------------------------------------------------------------- SENA
+sena="$data/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog"
+headless "$cfg/icp-slam/icp-slam_demo_classic.ini" "$sena" "$work/sena_mrpt_icp" > sena_icp.ini
+headless "$cfg/rbpf-slam/gridmapping_optimal_sampling.ini" "$sena" "$work/sena_mrpt_rbpf" > sena_rbpf.ini
+final_c() { awk '/"final_pose"/ { f = 1 } f && /"x"/ { x = $2 } f && /"y"/ { y = $2 }
+                 f && /yaw_deg/ { printf "%.2f %.2f", x, y; exit }' "$1/summary.json" | tr -d ','; }
+final_m() { tail -1 "$1/log_estimated_path.txt" | awk '{ printf "%.2f %.2f", $2, $3 }'; }
+
+m=$(secs icp-slam sena_icp.ini)
+c=$(secs "$bin" -q slam --profile sena_icp.ini --rawlog "$sena" --method icp --out sena_c_icp)
+row SENA "icp (MRPT INI)" "$c" "$m" "$(ratio "$c" "$m")" "$(final_c sena_c_icp) | $(final_m sena_mrpt_icp)"
+c=$(secs "$bin" -q slam --profile sena_icp.ini --rawlog "$sena" --method icp-graph --out sena_c_graph)
+row SENA "icp-graph vs icp-slam" "$c" "$m" "$(ratio "$c" "$m")" "$(final_c sena_c_graph) | $(final_m sena_mrpt_icp)"
+m=$(secs rbpf-slam sena_rbpf.ini)
+c=$(secs "$bin" -q slam --profile sena_rbpf.ini --rawlog "$sena" --method rbpf --out sena_c_rbpf)
+row SENA "rbpf (MRPT INI)" "$c" "$m" "$(ratio "$c" "$m")" "$(final_c sena_c_rbpf) | $(final_m sena_mrpt_rbpf)"
