@@ -324,7 +324,11 @@ void runEval(const EvalArgs& a, const GlobalOptions& g) {
 
   EvalResult r;
   std::vector<slam::Relation> rels;
-  if (!a.ref.empty()) r.ref = io::readTum(a.ref);
+  size_t reordered = 0;
+  if (!a.ref.empty()) r.ref = io::readTum(a.ref, &reordered);
+  if (reordered)
+    std::cerr << "note: " << a.ref << ": " << reordered
+              << " timestamps step back; the poses were sorted by time\n";
   if (!a.make_relations.empty()) {
     rels = slam::makeRelations(r.ref, a.rel_dist);
     if (rels.empty())
@@ -336,7 +340,11 @@ void runEval(const EvalArgs& a, const GlobalOptions& g) {
                 << " m apart) to " << a.make_relations << "\n";
     if (a.est.empty()) return;
   }
-  r.est = io::readTum(a.est);
+  size_t est_reordered = 0;
+  r.est = io::readTum(a.est, &est_reordered);
+  if (est_reordered)
+    std::cerr << "note: " << a.est << ": " << est_reordered
+              << " timestamps step back; the poses were sorted by time\n";
   if (!a.relations.empty()) rels = slam::readRelations(a.relations);
 
   // Stages that fail on bad input leave their error for the end, so what the

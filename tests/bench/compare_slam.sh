@@ -70,3 +70,32 @@ row SENA "icp-graph vs icp-slam" "$c" "$m" "$(ratio "$c" "$m")" "$(final_c sena_
 m=$(secs rbpf-slam sena_rbpf.ini)
 c=$(secs "$bin" -q slam --profile sena_rbpf.ini --rawlog "$sena" --method rbpf --out sena_c_rbpf)
 row SENA "rbpf (MRPT INI)" "$c" "$m" "$(ratio "$c" "$m")" "$(final_c sena_c_rbpf) | $(final_m sena_mrpt_rbpf)"
+
+# ---------------------------------------------------------------- CARMEN, laser only
+# The corrected logs' odometry fields repeat the corrected poses: importing
+# with --odometry none leaves the scans alone, and the pose fields become the
+# reference. ATE after SE(2) alignment (carenav eval). CSAIL stores times with
+# 6 significant digits (406 scans share 2 timestamps), so poses are matched by
+# scan index there (both apps write one pose per scan, in log order).
+ate() {  # est.tum ref.tum by_index -> "rmse"
+  local e=$1 r=$2
+  if [ "$3" = 1 ]; then
+    awk '!/^#/ { $1 = n++; print }' "$1" > "$1.idx"; e="$1.idx"
+    awk '!/^#/ { $1 = n++; print }' "$2" > "$2.idx"; r="$2.idx"
+  fi
+  "$bin" -q eval --est "$e" --ref "$r" --json 2>/dev/null |
+    awk '/"ate"/ { f = 1 } f && /"rmse"/ { gsub(",", ""); printf "%.2f", $2; exit }'
+}
+for log in intel csail; do
+  byidx=0; [ $log = csail ] && byidx=1
+  "$bin" -q import carmen "$shared/carmen/$log-corrected.log.gz" --out $log.rawlog --odometry none >/dev/null
+  headless "$cfg/icp-slam/icp-slam_demo_classic.ini" "$work/$log.rawlog" "$work/${log}_mrpt_icp" > ${log}_icp.ini
+  m=$(secs icp-slam ${log}_icp.ini)
+  c=$(secs "$bin" -q slam --profile ${log}_icp.ini --rawlog $log.rawlog --method icp --out ${log}_c_icp)
+  mrpt_path_to_tum "${log}_mrpt_icp/log_estimated_path.txt" ${log}_c_icp/trajectory.tum > ${log}_mrpt_icp.tum
+  row "$log" "icp (MRPT INI)" "$c" "$m" "$(ratio "$c" "$m")" \
+      "ATE rmse carenav $(ate ${log}_c_icp/trajectory.tum $log.tum $byidx) m | MRPT $(ate ${log}_mrpt_icp.tum $log.tum $byidx) m"
+  c=$(secs "$bin" -q slam --profile ${log}_icp.ini --rawlog $log.rawlog --method icp-graph --out ${log}_c_graph)
+  row "$log" "icp-graph vs icp-slam" "$c" "$m" "$(ratio "$c" "$m")" \
+      "ATE rmse carenav $(ate ${log}_c_graph/trajectory.tum $log.tum $byidx) m | MRPT $(ate ${log}_mrpt_icp.tum $log.tum $byidx) m"
+done

@@ -1,6 +1,7 @@
 #include <carenav/common/errors.h>
 #include <carenav/io/trajectory.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -27,10 +28,11 @@ void writeTum(const std::string& path, const Trajectory2D& traj) {
   std::filesystem::rename(tmp, path);
 }
 
-Trajectory2D readTum(const std::string& path) {
+Trajectory2D readTum(const std::string& path, size_t* reordered) {
   std::ifstream f(path);
   if (!f) throw InputError(path + ": cannot open the trajectory (no such file?)");
   Trajectory2D out;
+  size_t backwards = 0;
   std::string line;
   int lineno = 0;
   while (std::getline(f, line)) {
@@ -51,8 +53,7 @@ Trajectory2D readTum(const std::string& path) {
     const double qx = v[4], qy = v[5], qz = v[6], qw = v[7];
     if (qx * qx + qy * qy + qz * qz + qw * qw < 1e-18)
       throw InputError(path + ":" + std::to_string(lineno) + ": zero quaternion");
-    if (!out.empty() && v[0] < out.back().t)
-      throw InputError(path + ":" + std::to_string(lineno) + ": timestamp goes backwards");
+    if (!out.empty() && v[0] < out.back().t) ++backwards;
     TimedPose2D p;
     p.t = v[0];
     p.x = v[1];
@@ -62,6 +63,10 @@ Trajectory2D readTum(const std::string& path) {
     out.push_back(p);
   }
   if (out.empty()) throw InputError(path + ": no poses in the trajectory file");
+  if (backwards)
+    std::stable_sort(out.begin(), out.end(),
+                     [](const TimedPose2D& a, const TimedPose2D& b) { return a.t < b.t; });
+  if (reordered) *reordered = backwards;
   return out;
 }
 

@@ -3,6 +3,7 @@
 // sparse Levenberg-Marquardt (optimize_graph_spa_levmarq, header-only use).
 // The map is rebuilt from the optimised keyframes, so the loop closes in the
 // map as well as in the trajectory; MRPT's icp-slam cannot do that.
+#include <carenav/slam/correlative_matcher.h>
 #include <carenav/slam/mapper.h>
 
 #include <mrpt/config/CConfigFileMemory.h>
@@ -52,6 +53,28 @@ mrpt::poses::CPosePDFGaussianInf edge(const CPose2D& rel, double sxy, double sth
   return e;
 }
 
+/** An edge whose information is the ICP covariance (floored at 3 cm and
+ *  1 deg): a match that slides along a corridor is trusted across it, not
+ *  along it. */
+mrpt::poses::CPosePDFGaussianInf edgeFromCov(const CPose2D& rel,
+                                             const mrpt::math::CMatrixDouble33& cov) {
+  mrpt::math::CMatrixDouble33 c = cov;
+  c(0, 0) += 0.03 * 0.03;
+  c(1, 1) += 0.03 * 0.03;
+  c(2, 2) += (1.0 * kDeg) * (1.0 * kDeg);
+  mrpt::poses::CPosePDFGaussianInf e;
+  e.mean = rel;
+  e.cov_inv = c.inverse_LLt();
+  return e;
+}
+
+/** Largest standard deviation of the x-y block of a covariance. */
+double maxStdXY(const mrpt::math::CMatrixDouble33& c) {
+  const double a = c(0, 0), b = c(0, 1), d = c(1, 1);
+  const double l = 0.5 * (a + d) + std::sqrt(0.25 * (a - d) * (a - d) + b * b);
+  return std::sqrt(std::max(0.0, l));
+}
+
 class GraphMapper : public Mapper {
  public:
   explicit GraphMapper(const MapperConfig& cfg) : cfg_(cfg) {
@@ -70,7 +93,9 @@ class GraphMapper : public Mapper {
     auto local = std::make_shared<CSimplePointsMap>();
     local->insertionOptions = insert_opts_;
     local->insertObservation(*scan);
+    current_points_ = local;
 
+    if (step.odometry && step.index > 0) have_odometry_ = true;
     const CPose2D guess =
         (cfg_.slam.use_odometry && step.odometry) ? *step.odometry : last_increment_;
     const CPose2D before = pose_;
@@ -80,16 +105,17 @@ class GraphMapper : public Mapper {
     } else if (local->size() < 10) {
       pose_ = pose_ + guess;  // nothing to match: dead reckoning
     } else {
-      const CPose2D predicted = pose_ + guess;
-      mrpt::slam::CICP::TReturnInfo info;
-      auto pdf = icp_.Align(&submap_, local.get(), predicted, info);
-      if (info.goodness >= cfg_.slam.min_icp_goodness) {
-        pose_ = pdf->getMeanVal();
-        pdf->getCovariance(last_cov_);
+      const bool have_odometry = cfg_.slam.use_odometry && step.odometry.has_value();
+      const Match m = matchToSubmap(pose_ + guess, !have_odometry);
+      if (m.goodness >= cfg_.slam.min_icp_goodness) {
+        pose_ = m.pose;
+        last_cov_ = m.cov;
         matched = true;
         ++stats_.icp_accepted;
       } else {
-        pose_ = predicted;
+        // Without odometry a failed match must not extrapolate the last
+        // motion (a runaway spin): assume the robot stood still.
+        pose_ = have_odometry ? pose_ + guess : pose_;
         ++stats_.icp_rejected;
       }
     }
@@ -136,6 +162,51 @@ class GraphMapper : public Mapper {
   }
 
  private:
+  struct Match {
+    CPose2D pose;
+    double goodness = 0;
+    mrpt::math::CMatrixDouble33 cov;
+  };
+
+  /** ICP of the current scan against the submap from `predicted`. Without
+   *  odometry the prediction (constant velocity) can be far off: real logs
+   *  turn 20-60 deg between scans (the Intel CARMEN log). Then a few more
+   *  starting points are tried (no motion, and both rotated by +-20 and
+   *  +-40 deg), with a wide first pairing distance, and the best match kept. */
+  Match matchToSubmap(const CPose2D& predicted, bool search) {
+    CPose2D start = predicted;
+    double start_score = 0;
+    if (search) {
+      // Without odometry the prediction (constant velocity) can be a metre
+      // and tens of degrees off: real logs turn 20-60 deg between scans (the
+      // Intel and CSAIL CARMEN logs). A correlative search over a window
+      // around it finds the basin; ICP refines.
+      // Two priors: constant velocity, and no motion (a robot that stops
+      // turning would otherwise be spun on by its own prediction).
+      double s_pred = 0, s_still = 0;
+      const CPose2D a = correlative_.match(*current_points_, predicted, &s_pred);
+      const CPose2D b = correlative_.match(*current_points_, pose_, &s_still);
+      start = s_still > s_pred + 0.02 ? b : a;
+      start_score = std::max(s_pred, s_still);
+    }
+    Match best;
+    mrpt::slam::CICP::TReturnInfo info;
+    auto pdf = icp_.Align(&submap_, current_points_.get(), start, info);
+    best.goodness = info.goodness;
+    best.pose = pdf->getMeanVal();
+    pdf->getCovariance(best.cov);
+    if (search && best.goodness < cfg_.slam.min_icp_goodness && start_score >= 0.5) {
+      // ICP lost its pairs (thresholds too tight for this scan) but the
+      // correlative match is sound: keep it, with its coarse uncertainty.
+      best.pose = start;
+      best.goodness = start_score;
+      best.cov.setZero();
+      best.cov(0, 0) = best.cov(1, 1) = 0.05 * 0.05;
+      best.cov(2, 2) = (1.0 * kDeg) * (1.0 * kDeg);
+    }
+    return best;
+  }
+
   bool needKeyframe() const {
     if (keyframes_.empty()) return true;
     const CPose2D d = pose_ - keyframes_.back().pose;
@@ -152,7 +223,7 @@ class GraphMapper : public Mapper {
       const Keyframe& prev = keyframes_[id - 1];
       // Scan-matched links are tight; dead-reckoned ones loose.
       graph_.insertEdge(id - 1, id,
-                        matched ? edge(pose_ - prev.pose, 0.05, 1.0 * kDeg)
+                        matched ? edgeFromCov(pose_ - prev.pose, last_cov_)
                                 : edge(pose_ - prev.pose, 0.3, 5.0 * kDeg));
       if (tryLoopClosures(id)) optimise();
     }
@@ -195,27 +266,67 @@ class GraphMapper : public Mapper {
       const CPose2D rel = pdf->getMeanVal();
       if (info.goodness < s.loop_min_goodness) continue;
       if ((rel - guess).norm() > s.loop_max_correction) continue;
-      graph_.insertEdge(j, k, edge(rel, 0.05, 1.0 * kDeg));
+      mrpt::math::CMatrixDouble33 cov;
+      pdf->getCovariance(cov);
+      if (maxStdXY(cov) > 0.1) continue;  // slides along a corridor: no fix
+      graph_.insertEdge(j, k, edgeFromCov(rel, cov));
+      loop_edges_.emplace_back(j, k);
       ++stats_.loop_closures;
       any = true;
     }
     return any;
   }
 
+  /** Optimises the graph, then drops loop closures the solution disagrees
+   *  with (residual over 0.3 m or 5 deg: a wrong match that survived the
+   *  checks) and optimises again, a few rounds at most. */
   void optimise() {
     std::set<mrpt::graphs::TNodeID> free;
     for (size_t i = 0; i < keyframes_.size(); ++i)
       if (!keyframes_[i].fixed && i != graph_.root) free.insert(i);
     if (free.empty()) return;
-    mrpt::graphslam::TResultInfoSpaLevMarq info;
-    mrpt::containers::yaml params = mrpt::containers::yaml::Map();
-    params["max_iterations"] = 100;
-    mrpt::graphslam::optimize_graph_spa_levmarq(graph_, info, &free, params);
-    ++stats_.optimisations;
+    const auto before = graph_.nodes;
+    for (int round = 0; round < 3; ++round) {
+      graph_.nodes = before;
+      mrpt::graphslam::TResultInfoSpaLevMarq info;
+      mrpt::containers::yaml params = mrpt::containers::yaml::Map();
+      params["max_iterations"] = 100;
+      mrpt::graphslam::optimize_graph_spa_levmarq(graph_, info, &free, params);
+      ++stats_.optimisations;
+      if (!pruneLoopEdges()) break;
+    }
     const CPose2D last_before = keyframes_.back().pose;
     for (size_t i = 0; i < keyframes_.size(); ++i) keyframes_[i].pose = graph_.nodes[i];
     // The robot moves with its last keyframe.
     pose_ = keyframes_.back().pose + (pose_ - last_before);
+  }
+
+  bool pruneLoopEdges() {
+    bool removed = false;
+    for (auto it = loop_edges_.begin(); it != loop_edges_.end();) {
+      const auto [j, k] = *it;
+      auto range = graph_.edges.equal_range({j, k});
+      bool bad = false;
+      for (auto e = range.first; e != range.second;) {
+        const CPose2D est = graph_.nodes[k] - graph_.nodes[j];
+        const CPose2D res = est - e->second.mean;
+        if (res.norm() > 0.3 || std::abs(res.phi()) > 5 * kDeg) {
+          e = graph_.edges.erase(e);
+          bad = true;
+        } else {
+          ++e;
+        }
+      }
+      if (bad) {
+        it = loop_edges_.erase(it);
+        --stats_.loop_closures;
+        ++stats_.loop_rejected;
+        removed = true;
+      } else {
+        ++it;
+      }
+    }
+    return removed;
   }
 
   void rebuildSubmap() {
@@ -228,6 +339,7 @@ class GraphMapper : public Mapper {
       p.changeCoordinatesReference(mrpt::poses::CPose3D(keyframes_[i].pose));
       submap_.insertAnotherMap(&p, mrpt::poses::CPose3D());
     }
+    if (!cfg_.slam.use_odometry || !have_odometry_) correlative_.setReference(submap_);
   }
 
   void resume(const mrpt::maps::CSimpleMap& map) {
@@ -257,6 +369,10 @@ class GraphMapper : public Mapper {
   std::vector<ScanRecord> records_;
   mrpt::graphs::CNetworkOfPoses2DInf graph_;
   CSimplePointsMap submap_;
+  std::shared_ptr<CSimplePointsMap> current_points_;
+  std::vector<std::pair<size_t, size_t>> loop_edges_;
+  CorrelativeMatcher correlative_{CorrelativeMatcher::Parameters{}};
+  bool have_odometry_ = false;  // the log has shown odometry
   CPose2D pose_, last_increment_;
   mrpt::math::CMatrixDouble33 last_cov_ = [] {
     mrpt::math::CMatrixDouble33 c;

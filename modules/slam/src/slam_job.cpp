@@ -132,6 +132,7 @@ std::string SlamJobResult::summaryJson(const SlamJobOptions& o) const {
   j.key("keyframes").value(static_cast<uint64_t>(stats.keyframes));
   j.key("loop_candidates").value(static_cast<uint64_t>(stats.loop_candidates));
   j.key("loop_closures").value(static_cast<uint64_t>(stats.loop_closures));
+  j.key("loop_rejected").value(static_cast<uint64_t>(stats.loop_rejected));
   j.key("graph_optimisations").value(static_cast<uint64_t>(stats.optimisations));
   auto pose = [&](const char* k, const mrpt::poses::CPose2D& p) {
     j.key(k).beginObject();

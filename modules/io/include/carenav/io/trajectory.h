@@ -24,7 +24,10 @@ void writeTum(const std::string& path, const Trajectory2D& traj);
 /** Reads a TUM file; 3D poses are projected to the plane (yaw of the
  *  rotation). Blank lines and '#' comments are skipped. Throws InputError
  *  naming the file and line of any malformed line, and for a missing or
- *  empty file. Timestamps must not decrease. */
-Trajectory2D readTum(const std::string& path);
+ *  empty file. Poses are returned in time order: real logs have timestamps
+ *  that step back (the Intel CARMEN log does, 4 times), so such files are
+ *  sorted (stable), and `reordered`, when given, receives how many poses
+ *  were out of order. */
+Trajectory2D readTum(const std::string& path, size_t* reordered = nullptr);
 
 }  // namespace carenav::io

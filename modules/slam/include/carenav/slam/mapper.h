@@ -42,7 +42,8 @@ struct MapperStats {
   size_t icp_rejected = 0;     ///< ICP results below the goodness threshold
   size_t keyframes = 0;        ///< icp-graph: pose-graph nodes
   size_t loop_candidates = 0;  ///< icp-graph: loop closures tried
-  size_t loop_closures = 0;    ///< icp-graph: loop closures accepted
+  size_t loop_closures = 0;    ///< icp-graph: loop closures kept
+  size_t loop_rejected = 0;    ///< icp-graph: loop closures the optimised graph disagreed with
   size_t optimisations = 0;    ///< icp-graph: graph optimisations run
 };
 

@@ -1,0 +1,95 @@
+#include <carenav/io/rawlog_reader.h>
+#include <carenav/io/trajectory.h>
+#include <carenav/slam/correlative_matcher.h>
+
+#include <gtest/gtest.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+
+#include <cmath>
+#include <filesystem>
+
+using namespace carenav;
+using mrpt::maps::CSimplePointsMap;
+using mrpt::poses::CPose2D;
+
+namespace {
+/** An L-shaped room with a pillar: walls as points every 2 cm. */
+CSimplePointsMap room() {
+  CSimplePointsMap m;
+  auto wall = [&](double x0, double y0, double x1, double y1) {
+    const int n = static_cast<int>(std::hypot(x1 - x0, y1 - y0) / 0.02);
+    for (int i = 0; i <= n; ++i) m.insertPoint(x0 + (x1 - x0) * i / n, y0 + (y1 - y0) * i / n, 0);
+  };
+  wall(-3, -2, 5, -2);
+  wall(5, -2, 5, 1);
+  wall(5, 1, 1, 1);
+  wall(1, 1, 1, 4);
+  wall(1, 4, -3, 4);
+  wall(-3, 4, -3, -2);
+  wall(2, -0.5, 2.5, -0.5);
+  wall(2.5, -0.5, 2.5, 0);
+  return m;
+}
+}  // namespace
+
+TEST(CorrelativeMatcher, RecoversAPoseFarFromThePrior) {
+  const CSimplePointsMap ref = room();
+  slam::CorrelativeMatcher m{slam::CorrelativeMatcher::Parameters{}};
+  m.setReference(ref);
+  const CPose2D truth(0.7, 0.4, 25 * M_PI / 180);
+  // The scan: the room seen from `truth` (points in the robot frame).
+  CSimplePointsMap scan = ref;
+  scan.changeCoordinatesReference(mrpt::poses::CPose3D(-truth));
+  // A prior 0.6 m and 20 deg off, as a constant-velocity guess can be.
+  const CPose2D prior(0.2, 0.0, 5 * M_PI / 180);
+  double score = 0;
+  const CPose2D est = m.match(scan, prior, &score);
+  EXPECT_NEAR(est.x(), truth.x(), 0.03);
+  EXPECT_NEAR(est.y(), truth.y(), 0.03);
+  EXPECT_NEAR(est.phi(), truth.phi(), 1.0 * M_PI / 180);
+  EXPECT_GT(score, 0.9);
+}
+
+TEST(CorrelativeMatcher, MatchesConsecutiveScansOfTheIntelLog) {
+  // Real scans, 0.6 m and 20 deg apart on average; the reference poses of
+  // the (SLAM-corrected) log are the truth. From a no-motion prior the
+  // matcher must land on the right pose for nearly all of them.
+  const std::string log = std::string(CARENAV_SHARED_DATA) + "/carmen/intel-corrected.log.gz";
+  ASSERT_TRUE(std::filesystem::exists(log));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("carenav_cm_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string rawlog = (dir / "intel.rawlog").string();
+  ASSERT_EQ(std::system(("'" + std::string(CARENAV_BINARY_DIR) +
+                         "/apps/carenav/carenav' -q import carmen '" + log +
+                         "' --odometry none --out '" + rawlog + "' >/dev/null")
+                            .c_str()),
+            0);
+  const auto ref = io::readTum((dir / "intel.tum").string());
+  std::vector<CSimplePointsMap> scans;
+  io::RawlogReader r(rawlog);
+  io::RawlogEntry e;
+  while (r.next(e) && scans.size() < 280) {
+    auto s = std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(e.observation);
+    if (!s) continue;
+    CSimplePointsMap p;
+    p.insertionOptions.minDistBetweenLaserPoints = 0.05f;
+    p.insertObservation(*s);
+    scans.push_back(p);
+  }
+  auto pose = [&](size_t i) { return CPose2D(ref[i].x, ref[i].y, ref[i].yaw); };
+  slam::CorrelativeMatcher m{slam::CorrelativeMatcher::Parameters{}};
+  int ok = 0, n = 0;
+  for (size_t i = 20; i < scans.size(); i += 7, ++n) {
+    CSimplePointsMap submap;
+    for (size_t k = i - 5; k < i; ++k) {
+      CSimplePointsMap p = scans[k];
+      p.changeCoordinatesReference(mrpt::poses::CPose3D(pose(k)));
+      submap.insertAnotherMap(&p, mrpt::poses::CPose3D());
+    }
+    m.setReference(submap);
+    const CPose2D err = m.match(scans[i], pose(i - 1)) - pose(i);
+    if (err.norm() < 0.1 && std::abs(err.phi()) < 3 * M_PI / 180) ++ok;
+  }
+  EXPECT_GE(ok, n * 9 / 10) << ok << " of " << n;
+}
