@@ -1,4 +1,5 @@
 #include <carenav/common/errors.h>
+#include <carenav/io/number_table.h>
 #include <carenav/io/trajectory.h>
 
 #include <algorithm>
@@ -29,27 +30,9 @@ void writeTum(const std::string& path, const Trajectory2D& traj) {
 }
 
 Trajectory2D readTum(const std::string& path, size_t* reordered) {
-  std::ifstream f(path);
-  if (!f) throw InputError(path + ": cannot open the trajectory (no such file?)");
   Trajectory2D out;
   size_t backwards = 0;
-  std::string line;
-  int lineno = 0;
-  while (std::getline(f, line)) {
-    ++lineno;
-    const auto b = line.find_first_not_of(" \t\r");
-    if (b == std::string::npos || line[b] == '#') continue;
-    std::istringstream is(line);
-    double v[8];
-    int n = 0;
-    while (n < 8 && is >> v[n]) ++n;
-    std::string extra;
-    if (n != 8 || (is >> extra))
-      throw InputError(path + ":" + std::to_string(lineno) +
-                       ": expected 8 numbers 't x y z qx qy qz qw'");
-    for (double x : v)
-      if (!std::isfinite(x))
-        throw InputError(path + ":" + std::to_string(lineno) + ": not a finite number");
+  readNumberRows(path, 8, "t x y z qx qy qz qw", [&](const double* v, int lineno) {
     const double qx = v[4], qy = v[5], qz = v[6], qw = v[7];
     if (qx * qx + qy * qy + qz * qz + qw * qw < 1e-18)
       throw InputError(path + ":" + std::to_string(lineno) + ": zero quaternion");
@@ -61,7 +44,7 @@ Trajectory2D readTum(const std::string& path, size_t* reordered) {
     // Yaw of the rotation; this form needs no normalised quaternion.
     p.yaw = std::atan2(2 * (qw * qz + qx * qy), qw * qw + qx * qx - qy * qy - qz * qz);
     out.push_back(p);
-  }
+  });
   if (out.empty()) throw InputError(path + ": no poses in the trajectory file");
   if (backwards)
     std::stable_sort(out.begin(), out.end(),

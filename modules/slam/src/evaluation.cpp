@@ -1,4 +1,5 @@
 #include <carenav/common/errors.h>
+#include <carenav/io/number_table.h>
 #include <carenav/slam/evaluation.h>
 
 #include <algorithm>
@@ -89,10 +90,6 @@ std::vector<double> pathLengths(const Trajectory2D& t) {
   for (size_t k = 1; k < t.size(); ++k)
     s[k] = s[k - 1] + std::hypot(t[k].x - t[k - 1].x, t[k].y - t[k - 1].y);
   return s;
-}
-
-[[noreturn]] void lineError(const std::string& path, int lineno, const std::string& what) {
-  throw InputError(path + ":" + std::to_string(lineno) + ": " + what);
 }
 
 }  // namespace
@@ -273,37 +270,15 @@ RpeResult computeRpe(const Association& a, double distance) {
 }
 
 std::vector<Relation> readRelations(const std::string& path) {
-  if (std::filesystem::is_directory(path))
-    throw InputError(path + ": is a directory, not a relations file");
-  std::ifstream f(path);
-  if (!f) throw InputError(path + ": cannot open the relations file (no such file?)");
   std::vector<Relation> out;
-  std::string line;
-  int lineno = 0;
-  while (std::getline(f, line)) {
-    ++lineno;
-    const auto b = line.find_first_not_of(" \t\r");
-    if (b == std::string::npos || line[b] == '#') continue;
-    std::istringstream is(line);
-    double v[8];
-    int n = 0;
-    while (n < 8 && is >> v[n]) ++n;
-    std::string extra;
-    if (n != 8 || (is >> extra))
-      lineError(path, lineno,
-                "expected 8 numbers 't1 t2 x y z roll pitch yaw', found " +
-                    (n == 8 ? std::string("more") : std::to_string(n) + " numbers") +
-                    (n < 8 && !is.eof() ? " and then text" : ""));
-    for (double x : v)
-      if (!std::isfinite(x)) lineError(path, lineno, "not a finite number");
+  io::readNumberRows(path, 8, "t1 t2 x y z roll pitch yaw", [&](const double* v, int lineno) {
     Relation r;
     r.t1 = v[0];
     r.t2 = v[1];
     r.delta = {v[2], v[3], wrapAngle(v[7])};
     r.line = lineno;
     out.push_back(r);
-  }
-  if (f.bad()) throw InputError(path + ": read error");
+  });
   if (out.empty()) throw InputError(path + ": no relations in the file");
   return out;
 }
