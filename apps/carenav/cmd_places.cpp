@@ -1,0 +1,423 @@
+// carenav places add-room|add-place|rename|remove|list|where|check|render|goal
+// Rooms and places on a map (docs/places.md); all logic in modules/places.
+#include <carenav/common/errors.h>
+#include <carenav/common/json.h>
+#include <carenav/common/profile.h>
+#include <carenav/common/robot.h>
+#include <carenav/io/map_io.h>
+#include <carenav/places/places.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "commands.h"
+
+namespace carenav::app {
+
+namespace {
+
+using places::PlacesFile;
+
+struct FileArgs {
+  std::string map, file;
+  /** The places file: --file, else the one beside --map. */
+  std::string placesPath() const {
+    if (!file.empty()) return file;
+    if (map.empty()) throw InputError("give --map MAP (its places file is used) or --file FILE");
+    return places::placesPathForMap(map);
+  }
+  io::COccupancyGridMap2D grid() const {
+    if (map.empty()) throw InputError("--map MAP is required by this command");
+    return io::loadGridMap(map);
+  }
+};
+
+void addFileOptions(CLI::App* sub, FileArgs& a, bool map_required) {
+  auto* o = sub->add_option("--map", a.map,
+                            "Map (.gridmap(.gz), .simplemap(.gz), ROS .yaml); its places file is "
+                            "MAP with the extension replaced by .places.yaml");
+  if (map_required) o->required();
+  sub->add_option("--file", a.file, "Places file to use instead of the one beside the map");
+}
+
+std::vector<double> numbers(const std::string& text, const std::string& what, size_t count) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    char* end = nullptr;
+    errno = 0;
+    const double d = std::strtod(item.c_str(), &end);
+    if (item.empty() || end != item.c_str() + item.size() || errno == ERANGE || !std::isfinite(d))
+      throw InputError(what + " \"" + text + "\": \"" + item + "\" is not a finite number");
+    out.push_back(d);
+  }
+  if (out.size() != count || (!text.empty() && text.back() == ','))
+    throw InputError(what + " \"" + text + "\": expected " + std::to_string(count) +
+                     " numbers separated by commas");
+  return out;
+}
+
+PlacesFile loadOrEmpty(const std::string& path) {
+  if (!std::filesystem::exists(path)) return {};
+  return places::readPlacesFile(path);
+}
+
+void save(const PlacesFile& f, const std::string& path, const GlobalOptions& g) {
+  places::writePlacesFile(f, path);
+  if (!g.quiet) std::cerr << "[places] wrote " << path << "\n";
+}
+
+std::string fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3f", v);
+  return b;
+}
+
+void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
+  auto* cmd = app.add_subcommand(
+      "places",
+      "Rooms (named polygons) and places (named poses) on a map, kept in MAP's .places.yaml: "
+      "edit, list, locate a point, check against the map, draw, and turn names into goals");
+  cmd->require_subcommand(1);
+
+  // ---- add-room
+  struct AddRoomArgs {
+    FileArgs f;
+    std::string name, polygon, rect;
+  };
+  auto ar = std::make_shared<AddRoomArgs>();
+  auto* add_room = cmd->add_subcommand(
+      "add-room", "Add a room: a polygon in the map frame (metres) given by its corners in order");
+  add_room->add_option("name", ar->name, "Room name (unique, case-insensitive)")->required();
+  auto* poly_opt =
+      add_room->add_option("--polygon", ar->polygon, "Corners \"x1,y1 x2,y2 x3,y3 ...\" (metres)");
+  add_room->add_option("--rect", ar->rect, "Axis-aligned rectangle x0,y0,x1,y1 (metres)")
+      ->excludes(poly_opt);
+  addFileOptions(add_room, ar->f, false);
+  add_room->callback([ar, &g] {
+    places::Room r;
+    r.name = ar->name;
+    if (!ar->rect.empty()) {
+      const auto v = numbers(ar->rect, "--rect", 4);
+      r.polygon = {{v[0], v[1]}, {v[2], v[1]}, {v[2], v[3]}, {v[0], v[3]}};
+    } else if (!ar->polygon.empty()) {
+      std::stringstream ss(ar->polygon);
+      std::string corner;
+      while (ss >> corner) {
+        const auto v = numbers(corner, "--polygon corner", 2);
+        r.polygon.push_back({v[0], v[1]});
+      }
+    } else {
+      throw InputError("add-room: give --polygon or --rect");
+    }
+    const std::string path = ar->f.placesPath();
+    PlacesFile f = loadOrEmpty(path);
+    f.addRoom(r);
+    save(f, path, g);
+    std::cout << "room \"" << r.name << "\" added (" << r.polygon.size() << " corners)\n";
+  });
+
+  // ---- add-place
+  struct AddPlaceArgs {
+    FileArgs f;
+    std::string name, pose, kind = "place", room;
+    bool make_default = false;
+  };
+  auto ap = std::make_shared<AddPlaceArgs>();
+  auto* add_place = cmd->add_subcommand(
+      "add-place",
+      "Add a place: a pose x,y,heading (metres, degrees) with a kind; it belongs to the room "
+      "that contains it, or to --room");
+  add_place->add_option("name", ap->name, "Place name (unique, case-insensitive)")->required();
+  add_place->add_option("--pose", ap->pose, "x,y,heading_deg in the map frame")->required();
+  add_place->add_option("--kind", ap->kind, "place (default), user-search, object-search, dock")
+      ->check(CLI::IsMember({"place", "user-search", "object-search", "dock"}));
+  add_place->add_option("--room", ap->room,
+                        "Assign the place to this room (it must lie inside it); default: the "
+                        "first room containing it");
+  add_place->add_flag("--default", ap->make_default,
+                      "Make it the default place of its room (the goal for the room's name)");
+  addFileOptions(add_place, ap->f, false);
+  add_place->callback([ap, &g] {
+    const auto v = numbers(ap->pose, "--pose", 3);
+    places::Place p;
+    p.name = ap->name;
+    p.x = v[0], p.y = v[1], p.heading_deg = v[2];
+    p.kind = *places::parsePlaceKind(ap->kind);
+    p.room = ap->room;
+    const std::string path = ap->f.placesPath();
+    PlacesFile f = loadOrEmpty(path);
+    f.addPlace(p);
+    const places::Room* room = f.roomOf(f.places.back());
+    if (ap->make_default) {
+      if (!room) throw InputError("--default: place \"" + p.name + "\" lies in no room");
+      f.findRoom(room->name)->default_place = p.name;
+    }
+    save(f, path, g);
+    std::cout << "place \"" << p.name << "\" added in "
+              << (room ? "room \"" + room->name + "\"" : std::string("no room")) << "\n";
+    if (!room && !g.quiet)
+      std::cerr << "[places] warning: \"" << p.name << "\" lies outside every room\n";
+  });
+
+  // ---- rename / remove
+  struct RenameArgs {
+    FileArgs f;
+    std::string old_name, new_name;
+  };
+  auto rn = std::make_shared<RenameArgs>();
+  auto* rename = cmd->add_subcommand("rename", "Rename a room or place (references follow)");
+  rename->add_option("old", rn->old_name, "Current name")->required();
+  rename->add_option("new", rn->new_name, "New name")->required();
+  addFileOptions(rename, rn->f, false);
+  rename->callback([rn, &g] {
+    const std::string path = rn->f.placesPath();
+    PlacesFile f = places::readPlacesFile(path);
+    f.rename(rn->old_name, rn->new_name);
+    save(f, path, g);
+    std::cout << "\"" << rn->old_name << "\" renamed to \"" << rn->new_name << "\"\n";
+  });
+
+  struct RemoveArgs {
+    FileArgs f;
+    std::string name;
+  };
+  auto rm = std::make_shared<RemoveArgs>();
+  auto* remove = cmd->add_subcommand(
+      "remove", "Remove a room (its places stay) or a place (rooms lose it as default)");
+  remove->add_option("name", rm->name, "Room or place name")->required();
+  addFileOptions(remove, rm->f, false);
+  remove->callback([rm, &g] {
+    const std::string path = rm->f.placesPath();
+    PlacesFile f = places::readPlacesFile(path);
+    f.remove(rm->name);
+    save(f, path, g);
+    std::cout << "\"" << rm->name << "\" removed\n";
+  });
+
+  // ---- list
+  struct ListArgs {
+    FileArgs f;
+    bool json = false;
+  };
+  auto ls = std::make_shared<ListArgs>();
+  auto* list = cmd->add_subcommand("list", "List rooms and the places in each");
+  addFileOptions(list, ls->f, false);
+  list->add_flag("--json", ls->json, "Print JSON");
+  list->callback([ls] {
+    const std::string path = ls->f.placesPath();
+    const PlacesFile f = places::readPlacesFile(path);
+    if (ls->json) {
+      JsonWriter j;
+      j.beginObject().key("file").value(path).key("rooms").beginArray();
+      for (const auto& r : f.rooms) {
+        j.beginObject().key("name").value(r.name).key("polygon").beginArray();
+        for (const auto& p : r.polygon) j.beginArray().value(p.x).value(p.y).endArray();
+        j.endArray().key("default_place");
+        if (r.default_place.empty())
+          j.null();
+        else
+          j.value(r.default_place);
+        j.endObject();
+      }
+      j.endArray().key("places").beginArray();
+      for (const auto& p : f.places) {
+        j.beginObject().key("name").value(p.name);
+        j.key("x").value(p.x).key("y").value(p.y).key("heading_deg").value(p.heading_deg);
+        j.key("kind").value(places::placeKindName(p.kind)).key("room");
+        if (const auto* r = f.roomOf(p))
+          j.value(r->name);
+        else
+          j.null();
+        j.endObject();
+      }
+      j.endArray().endObject();
+      std::cout << j.str() << "\n";
+      return;
+    }
+    std::cout << path << ": " << f.rooms.size() << " rooms, " << f.places.size() << " places\n";
+    auto placeLine = [](const places::Place& p) {
+      std::cout << "    " << p.name << "  (" << fmt(p.x) << ", " << fmt(p.y) << ", "
+                << fmt(p.heading_deg) << " deg)  " << places::placeKindName(p.kind) << "\n";
+    };
+    for (const auto& r : f.rooms) {
+      std::cout << "  room " << r.name;
+      if (!r.default_place.empty()) std::cout << "  (default: " << r.default_place << ")";
+      std::cout << "\n";
+      for (const auto& p : f.places)
+        if (f.roomOf(p) == &r) placeLine(p);
+    }
+    bool header = false;
+    for (const auto& p : f.places)
+      if (!f.roomOf(p)) {
+        if (!header) std::cout << "  in no room:\n";
+        header = true;
+        placeLine(p);
+      }
+  });
+
+  // ---- where
+  struct WhereArgs {
+    FileArgs f;
+    std::string at;
+    bool json = false;
+  };
+  auto wh = std::make_shared<WhereArgs>();
+  auto* where = cmd->add_subcommand(
+      "where",
+      "The room containing a point and the nearest place (write a negative x as "
+      "`where -- -1.5,2`)");
+  where->add_option("point", wh->at, "x,y in the map frame (metres)")->required();
+  addFileOptions(where, wh->f, false);
+  where->add_flag("--json", wh->json, "Print JSON");
+  where->callback([wh] {
+    const auto v = numbers(wh->at, "point", 2);
+    const PlacesFile f = places::readPlacesFile(wh->f.placesPath());
+    const places::WhereResult w = places::where(f, v[0], v[1]);
+    if (wh->json) {
+      JsonWriter j;
+      j.beginObject().key("x").value(v[0]).key("y").value(v[1]).key("room");
+      if (w.room)
+        j.value(w.room->name);
+      else
+        j.null();
+      j.key("nearest_place");
+      if (w.nearest)
+        j.value(w.nearest->name);
+      else
+        j.null();
+      j.key("distance").value(w.nearest ? w.distance : std::nan(""));
+      j.endObject();
+      std::cout << j.str() << "\n";
+      return;
+    }
+    std::cout << "room: " << (w.room ? w.room->name : std::string("(none)")) << "\n";
+    if (w.nearest)
+      std::cout << "nearest place: " << w.nearest->name << " (" << fmt(w.distance) << " m)\n";
+    else
+      std::cout << "nearest place: (none)\n";
+  });
+
+  // ---- check
+  struct CheckArgs {
+    FileArgs f;
+    double radius = 0.35;
+    std::string profile;
+    bool json = false;
+  };
+  auto ck = std::make_shared<CheckArgs>();
+  auto* check = cmd->add_subcommand(
+      "check",
+      "Check rooms and places against the map: places outside every room, overlapping rooms, "
+      "rooms with no free cell, user-search places without a free disc to turn, places not on "
+      "a free cell. Lists every problem; exit code 2 if there is any");
+  addFileOptions(check, ck->f, true);
+  auto* radius_opt = check->add_option(
+      "--radius", ck->radius,
+      "Free disc a user-search place needs, metres (the robot's circumscribed radius; "
+      "default 0.35)");
+  check
+      ->add_option("--profile", ck->profile,
+                   "Robot profile: the radius is its [robot] footprint's circumscribed radius")
+      ->excludes(radius_opt);
+  check->add_flag("--json", ck->json, "Print JSON");
+  check->callback([ck] {
+    places::CheckParams cp;
+    cp.turn_radius = ck->radius;
+    if (!ck->profile.empty()) {
+      const Profile p = Profile::load(ck->profile);
+      cp.turn_radius = p.section<RobotParams>("robot").circumscribedRadius();
+    }
+    if (!(cp.turn_radius > 0) || !std::isfinite(cp.turn_radius))
+      throw InputError("--radius must be > 0 metres");
+    const std::string path = ck->f.placesPath();
+    const PlacesFile f = places::readPlacesFile(path);
+    const auto grid = ck->f.grid();
+    const auto problems = places::checkPlaces(f, grid, cp);
+    if (ck->json) {
+      JsonWriter j;
+      j.beginObject().key("file").value(path).key("map").value(ck->f.map);
+      j.key("turn_radius").value(cp.turn_radius).key("problems").beginArray();
+      for (const auto& pr : problems)
+        j.beginObject().key("kind").value(pr.kind).key("what").value(pr.what).endObject();
+      j.endArray().endObject();
+      std::cout << j.str() << "\n";
+    } else {
+      for (const auto& pr : problems) std::cout << pr.kind << ": " << pr.what << "\n";
+      if (problems.empty())
+        std::cout << path << ": " << f.rooms.size() << " rooms, " << f.places.size()
+                  << " places, no problem\n";
+    }
+    std::cout.flush();  // the list before the error line on a shared terminal
+    if (!problems.empty())
+      throw InputError(path + ": " + std::to_string(problems.size()) + " problem" +
+                       (problems.size() == 1 ? "" : "s"));
+  });
+
+  // ---- render
+  struct RenderArgs {
+    FileArgs f;
+    std::string out;
+    bool crop = false;
+  };
+  auto rd = std::make_shared<RenderArgs>();
+  auto* render = cmd->add_subcommand(
+      "render", "Draw the map with translucent rooms, their names, and places as arrows");
+  addFileOptions(render, rd->f, true);
+  render->add_option("--out", rd->out, "PNG file to write")->required();
+  render->add_flag("--crop", rd->crop, "Crop to the known cells plus 1 m");
+  render->callback([rd, &g] {
+    const PlacesFile f = places::readPlacesFile(rd->f.placesPath());
+    const auto grid = rd->f.grid();
+    io::RenderOptions ro;
+    ro.crop_to_known = rd->crop;
+    ro.title = "rooms and places: " + std::filesystem::path(rd->f.map).filename().string();
+    places::renderPlacesPng(f, grid, rd->out, ro);
+    if (!g.quiet) std::cerr << "[places] wrote " << rd->out << "\n";
+  });
+
+  // ---- goal
+  struct GoalArgs {
+    FileArgs f;
+    std::string name;
+    bool json = false;
+  };
+  auto gl = std::make_shared<GoalArgs>();
+  auto* goal = cmd->add_subcommand(
+      "goal",
+      "The goal pose of \"room/place\", \"place\" or \"room\" (its default place, else its most "
+      "central free cell): prints x y heading_deg");
+  goal->add_option("name", gl->name, "room/place, place or room")->required();
+  addFileOptions(goal, gl->f, true);
+  goal->add_flag("--json", gl->json, "Print JSON");
+  goal->callback([gl] {
+    const PlacesFile f = places::readPlacesFile(gl->f.placesPath());
+    const auto grid = gl->f.grid();
+    const places::Goal r = places::resolveGoal(f, grid, gl->name);
+    if (gl->json) {
+      JsonWriter j;
+      j.beginObject().key("name").value(gl->name).key("x").value(r.x).key("y").value(r.y);
+      j.key("heading_deg").value(r.heading_deg).key("room").value(r.room).key("place");
+      if (r.place.empty())
+        j.null();
+      else
+        j.value(r.place);
+      j.endObject();
+      std::cout << j.str() << "\n";
+    } else {
+      std::cout << fmt(r.x) << " " << fmt(r.y) << " " << fmt(r.heading_deg) << "\n";
+    }
+  });
+}
+
+}  // namespace
+
+CARENAV_COMMAND(70, addPlacesCommand);
+
+}  // namespace carenav::app
