@@ -3,6 +3,7 @@
 
 #include <carenav/common/crash_guard.h>
 #include <carenav/common/errors.h>
+#include <carenav/localization/localization_params.h>
 #include <carenav/slam/slam_params.h>
 
 #include <algorithm>
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
   limitAddressSpace(defaultMemoryLimitMB());
   // Every module's profile sections, so `profile check` knows all keys.
   slam::registerProfileSections();
+  localization::registerProfileSections();
   CLI::App app{
       "carenav: mapping, localisation and navigation for assistive indoor robots "
       "(walkers, social and care robots), on MRPT.\n"

@@ -1,0 +1,65 @@
+// Parameters of `carenav localize` and of Localizer: the profile's
+// [localization] section.
+#pragma once
+
+#include <carenav/common/params.h>
+
+#include <string>
+
+namespace carenav::localization {
+
+/** [localization]: Monte Carlo localisation on a known grid map (MRPT's
+ *  CMonteCarloLocalization2D, KLD-adaptive sample size, likelihood field),
+ *  with augmented-MCL recovery.
+ *  ```ini
+ *  [localization]
+ *  particles_max = 500
+ *  update_min_d = 0.25      ; m
+ *  update_min_a = 11.46     ; deg (0.2 rad)
+ *  ```
+ */
+struct LocalizationParams {
+  std::string sensor;  ///< sensorLabel of the 2D scans ("" any)
+  // KLD-adaptive sample size (Fox 2003)
+  int particles_min = 150;       ///< KLD lower bound on the sample size
+  int particles_max = 40000;     ///< KLD upper bound on the sample size
+  int global_particles = 40000;  ///< particles of a global start (capped by particles_max)
+  double kld_bin_xy = 0.10;      ///< m, KLD histogram bin size in x and y
+  double kld_bin_phi = 10;       ///< deg, KLD histogram bin size in heading
+  double kld_delta = 0.01;       ///< KLD: probability that the bound is wrong
+  double kld_epsilon = 0.01;     ///< KLD: largest KL divergence allowed
+  double resample_ess = 0.5;     ///< resample when the effective sample size ratio falls below
+  // likelihood field (MRPT's LF_Thrun)
+  double lf_sigma = 0.20;         ///< m, standard deviation of a hit around the nearest obstacle
+  double lf_max_corr_dist = 0.3;  ///< m, distances to the nearest obstacle are capped here
+  double lf_z_hit = 0.95;         ///< weight of the hit term
+  double lf_z_random = 0.05;      ///< weight of the random term
+  double lf_max_range = 80;       ///< m, longer ranges are not used
+  int lf_decimation = 20;         ///< use every n-th beam of a scan
+  // when to run the filter
+  double update_min_d = 0;  ///< m, travel between filter updates (0: every scan)
+  double update_min_a = 0;  ///< deg, turn between filter updates (0: every scan)
+  // odometry noise (MRPT's Gaussian motion model)
+  double odom_a1 = 0.05;          ///< m/m, translation noise per metre travelled
+  double odom_a2 = 0.001;         ///< m/deg, translation noise per degree turned
+  double odom_a3 = 1.0;           ///< deg/m, heading noise per metre travelled
+  double odom_a4 = 0.05;          ///< deg/deg, heading noise per degree turned
+  double odom_min_std_xy = 0.02;  ///< m, noise added to every motion
+  double odom_min_std_phi = 0.5;  ///< deg, noise added to every motion
+  // augmented MCL recovery (Thrun, Burgard, Fox, Probabilistic Robotics 8.3.5)
+  bool recovery = true;              ///< inject random particles when the likelihood drops
+  double alpha_slow = 0.05;          ///< decay of the long-term likelihood average
+  double alpha_fast = 0.5;           ///< decay of the short-term likelihood average
+  double max_inject_fraction = 0.3;  ///< largest share of particles replaced in one update
+  // reporting
+  double converged_spread = 0.3;  ///< m, converged when sqrt(var x + var y) falls below
+  double lost_spread = 1.0;       ///< m, a converged filter is lost when the spread exceeds
+  double free_threshold = 0.7;    ///< cells with p_free above are free (global start, injection)
+  int seed = 1;  ///< seeds MRPT's global random generator when a Localizer is built
+  static const ParamTable<LocalizationParams>& table();
+};
+
+/** Registers [localization] with the profile schemas. */
+void registerProfileSections();
+
+}  // namespace carenav::localization

@@ -1,0 +1,65 @@
+// `carenav localize`: a rawlog replayed through the Localizer on a known map,
+// with the track, its covariance, a picture and a summary written out.
+#pragma once
+
+#include <carenav/io/trajectory.h>
+#include <carenav/localization/localizer.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace carenav::localization {
+
+/** An initial pose guess: mean and standard deviations. */
+struct InitialPose {
+  double x = 0, y = 0, yaw = 0;          ///< m, m, rad
+  double std_x = 0.5, std_y = 0.5;       ///< m
+  double std_yaw = mrpt::DEG2RAD(10.0);  ///< rad
+};
+
+/** Parses "x,y,deg[,sx,sy,sdeg]". Throws InputError. */
+InitialPose parseInitialPose(const std::string& text);
+
+struct LocalizeJobOptions {
+  std::string map, rawlog, out_dir;
+  std::string ref;  ///< optional reference trajectory (TUM) for ATE
+  LocalizationParams params;
+  std::optional<InitialPose> init;  ///< exactly one of init and global
+  bool global = false;
+  double map_resolution = 0.05;  ///< m, cell size of a grid built from a .simplemap
+  bool progress = true;
+};
+
+/** One filter update, for the summary's time series. */
+struct UpdateRecord {
+  double t = 0;
+  size_t particles = 0;
+  double spread = 0, likelihood_ratio = 1, seconds = 0;
+  size_t injected = 0;
+};
+
+struct LocalizeJobResult {
+  size_t scans = 0, updates = 0, injections = 0;
+  io::Trajectory2D track;
+  std::vector<mrpt::math::CMatrixDouble33> covs;  ///< one per track pose
+  std::vector<UpdateRecord> records;
+  std::vector<LocalizationEvent> events;
+  std::optional<double> convergence_time;  ///< s since the first scan
+  bool converged_at_end = false;
+  double seconds = 0;                       ///< wall time (map loading excluded)
+  bool index_times = false;                 ///< the rawlog had no timestamps: t is the scan index
+  std::optional<double> ate_rmse, ate_max;  ///< m, with a reference
+  size_t ate_pairs = 0;
+  std::vector<std::string> outputs;
+  std::optional<std::string> rawlog_error;
+  std::string summaryJson(const LocalizeJobOptions& o) const;
+};
+
+/** Runs the job and writes DIR/{track.tum, track_cov.csv, map.png,
+ *  summary.json}. Throws InputError for a bad map, rawlog, initial pose or
+ *  reference, and when the rawlog has no usable 2D scan. A rawlog that breaks
+ *  part way keeps what was read (result.rawlog_error). */
+LocalizeJobResult runLocalize(const LocalizeJobOptions& o);
+
+}  // namespace carenav::localization

@@ -1,0 +1,107 @@
+// Monte Carlo localisation on a known occupancy grid, fed one scan at a time:
+// the library core of `carenav localize` and of live navigation.
+#pragma once
+
+#include <carenav/localization/localization_params.h>
+
+#include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/math/CMatrixFixed.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/poses/CPose2D.h>
+#include <mrpt/slam/CMonteCarloLocalization2D.h>
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace carenav::localization {
+
+/** A loss of localisation or a recovery from one. */
+struct LocalizationEvent {
+  enum class Kind { Loss, Recovery };
+  Kind kind = Kind::Loss;
+  double t = 0;       ///< time of the scan that showed it
+  double spread = 0;  ///< m, particle spread at that time
+  const char* name() const { return kind == Kind::Loss ? "loss" : "recovery"; }
+};
+
+/** What one step did. */
+struct StepResult {
+  bool updated = false;             ///< the filter ran (motion thresholds reached)
+  mrpt::poses::CPose2D pose;        ///< estimate after the step (mean, odometry since added)
+  mrpt::math::CMatrixDouble33 cov;  ///< covariance of x, y, yaw (m², rad²)
+  size_t particles = 0;             ///< sample size after the step
+  double spread = 0;                ///< m, sqrt(var x + var y)
+  double likelihood_ratio = 1;      ///< w_fast / w_slow after the update
+  size_t injected = 0;              ///< random particles added by recovery
+  double seconds = 0;               ///< CPU time of the filter update
+};
+
+/** MRPT's CMonteCarloLocalization2D with KLD-adaptive sample size and the
+ *  grid's likelihood field, plus augmented-MCL recovery: short- and long-term
+ *  averages of the mean observation likelihood (w_fast, w_slow); after an
+ *  update where w_fast/w_slow < 1, a share max(0, 1 - w_fast/w_slow) of the
+ *  particles (at most max_inject_fraction) is replaced by random poses over
+ *  the free cells. Not thread-safe; one instance per robot. */
+class Localizer {
+ public:
+  /** Copies the map. Throws InputError when it has no free cell. */
+  Localizer(const mrpt::maps::COccupancyGridMap2D& map, const LocalizationParams& params);
+  ~Localizer();
+  Localizer(const Localizer&) = delete;
+  Localizer& operator=(const Localizer&) = delete;
+
+  /** Particles drawn around a pose (Gaussian, std in m, m, rad), particles_max
+   *  of them. Throws InputError when the pose is outside the map or on an
+   *  occupied cell. */
+  void initPose(const mrpt::poses::CPose2D& pose, double std_x, double std_y, double std_phi);
+  /** Particles uniformly over the free cells, any heading; global_particles
+   *  of them, at most particles_max. */
+  void initGlobal();
+
+  /** One scan and the odometry increment since the previous scan (robot
+   *  frame of the previous scan). The filter runs on the first scan and then
+   *  whenever the motion since the last update reaches update_min_d or
+   *  update_min_a; in between the estimate follows odometry. `t` (seconds)
+   *  only stamps events. Throws std::logic_error before an init*(). */
+  StepResult step(const mrpt::poses::CPose2D& odometry,
+                  const mrpt::obs::CObservation2DRangeScan::Ptr& scan, double t);
+
+  mrpt::poses::CPose2D pose() const;
+  mrpt::math::CMatrixDouble33 covariance() const { return cov_; }
+  size_t particleCount() const;
+  double spread() const { return spread_; }
+  bool converged() const { return converged_; }
+  /** Time of the first update whose spread fell below converged_spread. */
+  std::optional<double> convergenceTime() const { return convergence_time_; }
+  const std::vector<LocalizationEvent>& events() const { return events_; }
+  size_t updates() const { return updates_; }
+  size_t injections() const { return injections_; }
+  const mrpt::maps::COccupancyGridMap2D& map() const { return *map_; }
+  const LocalizationParams& params() const { return p_; }
+
+ private:
+  mrpt::math::TPose2D randomFreePose() const;
+  void refreshEstimate();
+  size_t inject(double fraction);
+
+  LocalizationParams p_;
+  std::shared_ptr<mrpt::maps::COccupancyGridMap2D> map_;
+  std::vector<size_t> free_cells_;  // cell indices (x + y * size_x) of free space
+  mrpt::slam::CMonteCarloLocalization2D mcl_;
+  bool initialised_ = false, first_update_done_ = false;
+  mrpt::poses::CPose2D pending_;  // odometry since the last update
+  mrpt::poses::CPose2D mean_;
+  mrpt::math::CMatrixDouble33 cov_;
+  double spread_ = 0;
+  bool averages_set_ = false;
+  double log_w_slow_ = 0, log_w_fast_ = 0;
+  bool converged_ = false;
+  std::optional<double> convergence_time_;
+  std::vector<LocalizationEvent> events_;
+  size_t updates_ = 0, injections_ = 0;
+};
+
+}  // namespace carenav::localization
