@@ -2,7 +2,9 @@
 #include "commands.h"
 
 #include <carenav/common/errors.h>
+#include <carenav/io/map_io.h>
 #include <carenav/io/rawlog_info.h>
+#include <carenav/places/places.h>
 #include <carenav/slam/slam_job.h>
 
 #include <filesystem>
@@ -18,7 +20,9 @@ void addDemoCommand(CLI::App& app, const GlobalOptions& g) {
       "Telecom faculty of the University of Malaga, laser + odometry): summarise the rawlog, "
       "then build its map with icp-graph SLAM (loop closure) and write the map as PNG (with the "
       "trajectory), ROS map_server YAML+PGM, MRPT gridmap and simplemap, TUM trajectory and "
-      "summary.json. Later stages (rooms, navigation) join as they land.");
+      "summary.json; then annotate that map with the rooms and places of the SENA building "
+      "(map.places.yaml), check them against the map, say which room the robot ended in, and "
+      "draw them (map_places.png). Later stages (navigation) join as they land.");
   struct Args {
     std::string rawlog, out = "carenav-demo";
   };
@@ -34,12 +38,12 @@ void addDemoCommand(CLI::App& app, const GlobalOptions& g) {
                          ": MRPT's dataset is missing; install Debian's mrpt-common "
                          "(scripts/setup.sh does) or set CARENAV_MRPT_DATASETS");
     }
-    if (!g.quiet) std::cerr << "[demo] step 1/2: rawlog summary of " << path << "\n";
+    if (!g.quiet) std::cerr << "[demo] step 1/3: rawlog summary of " << path << "\n";
     const io::RawlogInfo ri = io::summarizeRawlog(path, !g.quiet);
     std::cout << ri.toText() << std::flush;
     if (ri.error) throw InputError(*ri.error);
 
-    if (!g.quiet) std::cerr << "[demo] step 2/2: icp-graph SLAM into " << a->out << "\n";
+    if (!g.quiet) std::cerr << "[demo] step 2/3: icp-graph SLAM into " << a->out << "\n";
     slam::SlamJobOptions o;  // embedded defaults: SlamParams{}, IcpParams{}
     o.rawlog = path;
     o.out_dir = a->out;
@@ -51,6 +55,31 @@ void addDemoCommand(CLI::App& app, const GlobalOptions& g) {
               << " s\n"
               << "final pose:         " << r.final_pose.asString() << "\n";
     for (const auto& f : r.outputs) std::cout << "wrote:              " << f << "\n";
+
+    // Rooms and places: the shipped annotation of the SENA building, which
+    // fits maps built from this rawlog (same start frame).
+    if (!a->rawlog.empty()) return;  // another rawlog: another building
+    if (!g.quiet) std::cerr << "[demo] step 3/3: rooms and places on the map\n";
+    namespace fs = std::filesystem;
+    const std::string map_yaml = (fs::path(a->out) / "map.yaml").string();
+    const places::PlacesFile pf = places::parsePlaces(senaPlacesYaml(), "maps/sena.places.yaml");
+    const std::string pf_path = places::placesPathForMap(map_yaml);
+    places::writePlacesFile(pf, pf_path);
+    const auto grid = io::loadGridMap(map_yaml);
+    const auto problems = places::checkPlaces(pf, grid);
+    std::cout << "\nrooms and places:   " << pf.rooms.size() << " rooms, " << pf.places.size()
+              << " places, " << problems.size() << " problems against the map\n";
+    for (const auto& p : problems) std::cout << "  problem: " << p.what << "\n";
+    const auto w = places::where(pf, r.final_pose.x(), r.final_pose.y());
+    std::cout << "robot ends in:      " << (w.room ? w.room->name : std::string("no room"));
+    if (w.nearest) std::cout << ", " << w.distance << " m from \"" << w.nearest->name << "\"";
+    std::cout << "\n";
+    const std::string png = (fs::path(a->out) / "map_places.png").string();
+    io::RenderOptions ro;
+    ro.crop_to_known = true;
+    ro.title = "carenav demo: rooms and places of the SENA map";
+    places::renderPlacesPng(pf, grid, png, ro);
+    std::cout << "wrote:              " << pf_path << "\nwrote:              " << png << "\n";
   });
 }
 }  // namespace

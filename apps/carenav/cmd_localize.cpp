@@ -1,9 +1,12 @@
-// carenav localize --profile P --map M --rawlog R (--init x,y,deg[,sx,sy,sdeg] | --global)
-//                  --out DIR [--ref GT.tum]
+// carenav localize --profile P --map M --rawlog R
+//                  (--init x,y,deg[,sx,sy,sdeg] | --global | --in-room NAME) --out DIR [--ref
+//                  GT.tum]
 #include "commands.h"
+#include "localize_start.h"
 
 #include <carenav/common/profile.h>
 #include <carenav/localization/localize_job.h>
+#include <carenav/places/places.h>
 
 #include <iostream>
 
@@ -12,11 +15,31 @@ namespace carenav::app {
 namespace {
 
 struct LocalizeArgs {
-  std::string profile, map, rawlog, out, init, ref;
+  std::string profile, map, rawlog, out, init, ref, room, places_file;
   bool global = false;
   double map_resolution = 0.05;
   std::vector<std::string> sets;
 };
+
+}  // namespace
+
+/** The --in-room region: the named room of a places file. */
+localization::LocalizeJobOptions::Region roomRegion(const std::string& places_file,
+                                                    const std::string& name) {
+  const places::PlacesFile f = places::readPlacesFile(places_file);
+  const places::Room* room = f.findRoom(name);
+  if (!room) {
+    std::string known;
+    for (const auto& r : f.rooms) known += (known.empty() ? "" : ", ") + r.name;
+    throw InputError(places_file + ": no room named '" + name +
+                     "' (rooms: " + (known.empty() ? "none" : known) + ")");
+  }
+  return {room->name, [poly = room->polygon](double x, double y) {
+            return places::pointInPolygon(poly, x, y);
+          }};
+}
+
+namespace {
 
 void addLocalizeCommand(CLI::App& app, const GlobalOptions& g) {
   auto a = std::make_shared<LocalizeArgs>();
@@ -37,6 +60,11 @@ void addLocalizeCommand(CLI::App& app, const GlobalOptions& g) {
                   "(default 0.5,0.5,10)");
   cmd->add_flag("--global", a->global,
                 "Global localisation: particles uniformly over the free space of the map");
+  cmd->add_option("--in-room", a->room,
+                  "Global localisation inside one room of the map's places file (carenav "
+                  "places): particles over the free cells of that room only");
+  cmd->add_option("--places", a->places_file,
+                  "Places file for --in-room (default: the one beside --map, MAP.places.yaml)");
   cmd->add_option("--ref", a->ref, "Reference trajectory (TUM) to draw and to compute the ATE");
   cmd->add_option("--map-resolution", a->map_resolution,
                   "Cell size (m) of the grid built from a .simplemap (default 0.05)");
@@ -55,6 +83,9 @@ void addLocalizeCommand(CLI::App& app, const GlobalOptions& g) {
     o.map_resolution = a->map_resolution;
     o.progress = !g.quiet;
     if (!a->init.empty()) o.init = localization::parseInitialPose(a->init);
+    if (!a->room.empty())
+      o.region = roomRegion(
+          a->places_file.empty() ? places::placesPathForMap(a->map) : a->places_file, a->room);
     const auto r = localization::runLocalize(o);
     if (!g.quiet) {
       const auto& f = r.track.back();

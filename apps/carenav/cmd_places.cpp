@@ -5,8 +5,10 @@
 #include <carenav/common/profile.h>
 #include <carenav/common/robot.h>
 #include <carenav/io/map_io.h>
+#include <carenav/localization/localize_job.h>
 #include <carenav/places/places.h>
 
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -16,6 +18,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "localize_start.h"
 
 namespace carenav::app {
 
@@ -79,6 +82,51 @@ std::string fmt(double v) {
   return b;
 }
 
+/** add-place --here: localise the rawlog on the map; the final estimate,
+ *  which must have converged, is the place's pose (x, y, degrees). */
+template <class Args>
+std::array<double, 3> poseAtEndOfRawlog(const Args& a, const GlobalOptions& g) {
+  if (a.f.map.empty()) throw InputError("add-place --here: --map MAP is required");
+  if (a.rawlog.empty()) throw InputError("add-place --here: --rawlog R is required");
+  Profile prof = a.profile.empty() ? Profile::fromText("[localization]\n", "(embedded defaults)")
+                                   : Profile::load(a.profile);
+  prof.applyOverrides(a.sets);
+  if (!a.profile.empty()) {
+    prof.validate();
+  } else {
+    for (const auto& s : a.sets)
+      if (s.rfind("localization.", 0) != 0)
+        throw InputError("--set '" + s +
+                         "': without --profile only localization.* values can be set");
+  }
+  localization::LocalizeJobOptions o;
+  o.params = prof.section<localization::LocalizationParams>("localization");
+  o.map = a.f.map;
+  o.rawlog = a.rawlog;
+  o.progress = !g.quiet;
+  if (!a.init.empty())
+    o.init = localization::parseInitialPose(a.init);
+  else if (!a.in_room.empty())
+    o.region = roomRegion(a.f.placesPath(), a.in_room);
+  else
+    o.global = true;
+  const auto r = localization::runLocalize(o);
+  if (r.rawlog_error) throw InputError(*r.rawlog_error + " (add-place --here needs the whole log)");
+  if (!r.converged_at_end) {
+    std::ostringstream m;
+    m << "add-place --here: localisation on " << a.rawlog << " has not converged at its end "
+      << "(particle spread " << r.final_spread << " m); give --init or --in-room, or drive "
+      << "longer before the place";
+    throw std::runtime_error(m.str());
+  }
+  const auto& e = r.track.back();
+  if (!g.quiet)
+    std::cerr << "[places] localised " << r.scans << " scans; the rawlog ends at (" << fmt(e.x)
+              << ", " << fmt(e.y) << ", " << fmt(e.yaw * 180 / M_PI) << " deg), spread "
+              << fmt(r.final_spread) << " m\n";
+  return {e.x, e.y, e.yaw * 180 / M_PI};
+}
+
 void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
   auto* cmd = app.add_subcommand(
       "places",
@@ -128,6 +176,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     FileArgs f;
     std::string name, pose, kind = "place", room;
     bool make_default = false;
+    // --here: the pose where localisation on a rawlog ends
+    bool here = false;
+    std::string rawlog, profile, init, in_room;
+    std::vector<std::string> sets;
   };
   auto ap = std::make_shared<AddPlaceArgs>();
   auto* add_place = cmd->add_subcommand(
@@ -135,7 +187,22 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
       "Add a place: a pose x,y,heading (metres, degrees) with a kind; it belongs to the room "
       "that contains it, or to --room");
   add_place->add_option("name", ap->name, "Place name (unique, case-insensitive)")->required();
-  add_place->add_option("--pose", ap->pose, "x,y,heading_deg in the map frame")->required();
+  auto* pose_opt = add_place->add_option("--pose", ap->pose, "x,y,heading_deg in the map frame");
+  auto* here_opt = add_place->add_flag(
+      "--here", ap->here,
+      "The pose where the robot is at the end of --rawlog: localise the rawlog on --map "
+      "(how a facilitator records a place by driving the robot there)");
+  pose_opt->excludes(here_opt);
+  add_place->add_option("--rawlog", ap->rawlog, "With --here: the rawlog that ends at the place");
+  add_place->add_option("--profile", ap->profile,
+                        "With --here: robot profile for localisation (its [localization] "
+                        "section; default: the built-in defaults)");
+  add_place->add_option("--init", ap->init,
+                        "With --here: initial pose x,y,deg[,sx,sy,sdeg] of the rawlog (default: "
+                        "global localisation, or --in-room)");
+  add_place->add_option("--in-room", ap->in_room,
+                        "With --here: the rawlog starts in this room of the places file");
+  add_place->add_option("--set", ap->sets, "With --here: override a profile value s.k=v");
   add_place->add_option("--kind", ap->kind, "place (default), user-search, object-search, dock")
       ->check(CLI::IsMember({"place", "user-search", "object-search", "dock"}));
   add_place->add_option("--room", ap->room,
@@ -145,10 +212,18 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
                       "Make it the default place of its room (the goal for the room's name)");
   addFileOptions(add_place, ap->f, false);
   add_place->callback([ap, &g] {
-    const auto v = numbers(ap->pose, "--pose", 3);
     places::Place p;
     p.name = ap->name;
-    p.x = v[0], p.y = v[1], p.heading_deg = v[2];
+    if (ap->here) {
+      const auto pose = poseAtEndOfRawlog(*ap, g);
+      p.x = pose[0], p.y = pose[1], p.heading_deg = pose[2];
+    } else {
+      if (ap->pose.empty()) throw InputError("add-place: give --pose x,y,deg or --here");
+      if (!ap->rawlog.empty() || !ap->init.empty() || !ap->in_room.empty())
+        throw InputError("add-place: --rawlog, --init and --in-room go with --here");
+      const auto v = numbers(ap->pose, "--pose", 3);
+      p.x = v[0], p.y = v[1], p.heading_deg = v[2];
+    }
     p.kind = *places::parsePlaceKind(ap->kind);
     p.room = ap->room;
     const std::string path = ap->f.placesPath();

@@ -43,4 +43,8 @@ struct ImportRegistrar {
 /** Where MRPT's datasets are: $CARENAV_MRPT_DATASETS, else the build-time path. */
 std::string mrptDatasetsDir();
 
+/** The rooms and places of maps/sena.places.yaml, embedded at build time
+ *  (the demo annotates its map of the SENA rawlog with them). */
+const char* senaPlacesYaml();
+
 }  // namespace carenav::app

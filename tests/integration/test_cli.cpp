@@ -203,6 +203,21 @@ TEST(Cli, DemoSummarisesTheSenaRawlogAndMapsIt) {
   EXPECT_GT(std::stoi(m[1]), 0);
   for (const char* f : {"map.png", "map.yaml", "map.pgm", "map.gridmap.gz", "trajectory.tum"})
     EXPECT_TRUE(fs::exists(out / f)) << f;
+  // Step 3: the map annotated with the SENA rooms and places, which fit it
+  // (no problem against the map) and place the end of the loop in the south hall.
+  EXPECT_NE(r.out.find("8 rooms, 5 places, 0 problems against the map"), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("robot ends in:      South hall"), std::string::npos) << r.out;
+  const std::string places = slurp(out / "map.places.yaml");
+  EXPECT_NE(places.find("name: \"West hall\""), std::string::npos) << places;
+  const std::string png = slurp(out / "map_places.png");
+  EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  EXPECT_GT(png.size(), fs::file_size(out / "map.png") / 2);
+  // The annotated map answers `places where` like any other.
+  const RunResult w =
+      carenav({"places", "where", "--map", (out / "map.yaml").string(), "--", "-15,-5"});
+  EXPECT_EQ(w.code, 0) << w.err;
+  EXPECT_NE(w.out.find("West hall"), std::string::npos) << w.out;
   // Without MRPT's datasets the demo says what to install, exit 2.
   const RunResult none = shell("CARENAV_MRPT_DATASETS=/nonexistent " + quote(kBin) + " demo");
   EXPECT_EQ(none.code, 2);

@@ -187,3 +187,113 @@ TEST(CliLocalize, BadInputsExitTwoWithAClearMessage) {
 }
 
 }  // namespace
+
+// --in-room: a places file beside a copy of the map names the room where the
+// log starts; global localisation seeded only there converges to the pose the
+// tracking test reaches, and a missing room is a clear input error.
+TEST(CliLocalize, InRoomStartsInsideTheNamedRoom) {
+  const auto dir = scratch() / "loc_room";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const auto map = dir / "map.simplemap.gz";
+  fs::copy_file(kLocMap, map);
+  ASSERT_EQ(
+      carenav({"places", "add-room", "Lab", "--rect", "2,-12,6,-8", "--map", map.string()}).code,
+      0);
+  ASSERT_EQ(
+      carenav({"places", "add-room", "Store", "--rect", "30,-20,32,-18", "--map", map.string()})
+          .code,
+      0);
+  auto args = [&](const std::string& room, const fs::path& out) {
+    return std::vector<std::string>{"localize",   "--profile", kProfile,    "--map",
+                                    map.string(), "--rawlog",  kLocRawlog,  "--in-room",
+                                    room,         "--out",     out.string()};
+  };
+  RunResult r = carenav(args("lab", dir / "a"));  // names match case-insensitively
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string summary = slurp(dir / "a" / "summary.json");
+  EXPECT_NE(summary.find("\"start\": \"room\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"room\": \"Lab\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"converged_at_end\": true"), std::string::npos) << summary;
+  const Pose room_end = finalPose(summary);
+  r = localize({"--init", "3.7,-10.1,-40,0.2,0.2,5"}, dir / "b");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Pose tracked = finalPose(slurp(dir / "b" / "summary.json"));
+  EXPECT_NEAR(room_end.x, tracked.x, kTolPos);
+  EXPECT_NEAR(room_end.y, tracked.y, kTolPos);
+  EXPECT_NEAR(room_end.yaw_deg, tracked.yaw_deg, kTolYawDeg);
+  // The first track pose lies in the room: particles started nowhere else.
+  std::istringstream tum(slurp(dir / "a" / "track.tum"));
+  std::string line;
+  while (std::getline(tum, line) && (line.empty() || line[0] == '#')) {
+  }
+  double t = 0, x = NAN, y = NAN;
+  std::istringstream(line) >> t >> x >> y;
+  EXPECT_TRUE(x >= 2 && x <= 6 && y >= -12 && y <= -8) << x << " " << y;
+
+  // Unknown room: exit 2 naming the file and the rooms it has.
+  r = carenav(args("Kitchen", dir / "c"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("no room named 'Kitchen' (rooms: Lab, Store)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("map.places.yaml"), std::string::npos) << r.err;
+  // A room outside the map's free space.
+  r = carenav(args("Store", dir / "d"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("room 'Store' contains no free cell"), std::string::npos) << r.err;
+  // No places file at all, and --in-room with --global.
+  r = localize({"--in-room", "Lab"}, dir / "e");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("places.yaml"), std::string::npos) << r.err;
+  r = carenav([&] {
+    auto a = args("Lab", dir / "f");
+    a.push_back("--global");
+    return a;
+  }());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("exactly one of"), std::string::npos) << r.err;
+}
+
+// places add-place --here: the place is where localisation ends on the rawlog.
+TEST(CliLocalize, AddPlaceHereRecordsWhereTheRawlogEnds) {
+  const auto dir = scratch() / "loc_here";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const auto map = dir / "map.simplemap.gz";
+  fs::copy_file(kLocMap, map);
+  ASSERT_EQ(
+      carenav({"places", "add-room", "Lab", "--rect", "2,-12,6,-8", "--map", map.string()}).code,
+      0);
+  RunResult r = carenav({"places", "add-place", "Lab exit", "--here", "--rawlog", kLocRawlog,
+                         "--map", map.string(), "--in-room", "Lab"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = carenav({"places", "list", "--json", "--map", map.string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  // Where MRPT's pf-localization ends on this log (tests/unit/localization).
+  const auto at = r.out.find("Lab exit");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const std::string place = r.out.substr(at);
+  EXPECT_NEAR(jsonReal(place, "x").value_or(NAN), 15.91, kTolPos) << place;
+  EXPECT_NEAR(jsonReal(place, "y").value_or(NAN), -10.01, kTolPos) << place;
+  EXPECT_NEAR(jsonReal(place, "heading_deg").value_or(NAN), 4.93, kTolYawDeg) << place;
+  // --here needs a rawlog; --pose and --here exclude each other; --rawlog needs --here.
+  r = carenav({"places", "add-place", "X", "--here", "--map", map.string()});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--rawlog"), std::string::npos) << r.err;
+  r = carenav({"places", "add-place", "X", "--here", "--pose", "1,2,3", "--map", map.string()});
+  EXPECT_EQ(r.code, 2);
+  r = carenav({"places", "add-place", "X", "--pose", "16,-10,0", "--rawlog", kLocRawlog, "--map",
+               map.string()});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("go with --here"), std::string::npos) << r.err;
+  // A rawlog cut short: exit 2 naming it, and the places file is untouched.
+  const std::string before = slurp(dir / "map.places.yaml");
+  {
+    const std::string raw = slurp(kLocRawlog);
+    std::ofstream(dir / "cut.rawlog", std::ios::binary) << raw.substr(0, raw.size() / 3);
+  }
+  r = carenav({"places", "add-place", "X", "--here", "--rawlog", (dir / "cut.rawlog").string(),
+               "--map", map.string(), "--in-room", "Lab"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("cut.rawlog"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(dir / "map.places.yaml"), before);
+}

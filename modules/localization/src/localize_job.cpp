@@ -77,8 +77,9 @@ io::Overlay overlayOf(const io::Trajectory2D& traj, io::Rgb colour, bool markers
 }  // namespace
 
 LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
-  if (o.init.has_value() == o.global)
-    throw InputError("give exactly one of --init x,y,deg[,sx,sy,sdeg] and --global");
+  if (int(o.init.has_value()) + int(o.global) + int(o.region.has_value()) != 1)
+    throw InputError(
+        "give exactly one of --init x,y,deg[,sx,sy,sdeg], --global and --in-room NAME");
   io::MapLoadOptions mo;
   mo.simplemap_resolution = o.map_resolution;
   const auto grid = io::loadGridMap(o.map, mo);
@@ -90,9 +91,11 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
   if (o.init)
     loc.initPose(mrpt::poses::CPose2D(o.init->x, o.init->y, o.init->yaw), o.init->std_x,
                  o.init->std_y, o.init->std_yaw);
+  else if (o.region)
+    loc.initInRegion(o.region->inside, "room '" + o.region->name + "'");
   else
     loc.initGlobal();
-  fs::create_directories(o.out_dir);
+  if (!o.out_dir.empty()) fs::create_directories(o.out_dir);
 
   LocalizeJobResult r;
   const auto t0 = std::chrono::steady_clock::now();
@@ -139,6 +142,8 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
   for (auto& e : r.events) e.t -= *t_first;
   if (loc.convergenceTime()) r.convergence_time = *loc.convergenceTime() - *t_first;
   r.converged_at_end = loc.converged();
+  r.final_spread = loc.spread();
+  if (o.out_dir.empty()) return r;
 
   io::RenderOptions ro;
   ro.crop_to_known = true;
@@ -175,7 +180,8 @@ std::string LocalizeJobResult::summaryJson(const LocalizeJobOptions& o) const {
   j.beginObject();
   j.key("map").value(o.map);
   j.key("rawlog").value(o.rawlog);
-  j.key("start").value(o.global ? "global" : "pose");
+  j.key("start").value(o.global ? "global" : o.region ? "room" : "pose");
+  if (o.region) j.key("room").value(o.region->name);
   if (o.init) {
     j.key("init").beginObject();
     j.key("x").value(o.init->x).key("y").value(o.init->y);

@@ -75,10 +75,10 @@ Localizer::Localizer(const COccupancyGridMap2D& map, const LocalizationParams& p
 
 Localizer::~Localizer() = default;
 
-mrpt::math::TPose2D Localizer::randomFreePose() const {
+mrpt::math::TPose2D Localizer::randomPoseIn(const std::vector<size_t>& cells) const {
   auto& rng = mrpt::random::getRandomGenerator();
   const size_t nx = map_->getSizeX();
-  const size_t k = free_cells_[rng.drawUniform32bit() % free_cells_.size()];
+  const size_t k = cells[rng.drawUniform32bit() % cells.size()];
   const double res = map_->getResolution();
   const double x = map_->idx2x(static_cast<int>(k % nx)) + rng.drawUniform(-0.5, 0.5) * res;
   const double y = map_->idx2y(static_cast<int>(k / nx)) + rng.drawUniform(-0.5, 0.5) * res;
@@ -113,11 +113,24 @@ void Localizer::initPose(const CPose2D& pose, double std_x, double std_y, double
   converged_ = spread_ < p_.converged_spread;
 }
 
-void Localizer::initGlobal() {
+void Localizer::initGlobal() { initUniform(free_cells_); }
+
+void Localizer::initInRegion(const std::function<bool(double, double)>& inside,
+                             const std::string& what) {
+  const size_t nx = map_->getSizeX();
+  std::vector<size_t> cells;
+  for (size_t k : free_cells_)
+    if (inside(map_->idx2x(static_cast<int>(k % nx)), map_->idx2y(static_cast<int>(k / nx))))
+      cells.push_back(k);
+  if (cells.empty()) throw InputError(what + " contains no free cell of the map");
+  initUniform(cells);
+}
+
+void Localizer::initUniform(const std::vector<size_t>& cells) {
   const size_t n = static_cast<size_t>(std::min(p_.global_particles, p_.particles_max));
   mcl_.m_particles.resize(n);
   for (auto& part : mcl_.m_particles) {
-    part.d = randomFreePose();
+    part.d = randomPoseIn(cells);
     part.log_w = 0;
   }
   initialised_ = true;

@@ -207,5 +207,33 @@ TEST(ParseInitialPose, ReadsThreeOrSixNumbers) {
     EXPECT_THROW(parseInitialPose(bad), InputError) << bad;
 }
 
+TEST(Localizer, RoomStartPutsEveryParticleInTheRoomAndConverges) {
+  LocalizationParams p;
+  p.global_particles = 2000;
+  Localizer loc(demoMap(), p);
+  // A 4 m x 4 m "room" around where the log starts (3.7, -10.1).
+  const auto inside = [](double x, double y) { return x >= 2 && x <= 6 && y >= -12 && y <= -8; };
+  loc.initInRegion(inside, "room 'start'");
+  EXPECT_EQ(loc.particleCount(), 2000u);
+  const auto c = loc.pose();
+  EXPECT_TRUE(inside(c.x(), c.y())) << c.asString();
+  EXPECT_FALSE(loc.converged());
+  const ReplayResult r = replay(loc);
+  EXPECT_TRUE(loc.converged());
+  EXPECT_NEAR(r.final_pose.x(), kMrptX, kTolPos);
+  EXPECT_NEAR(r.final_pose.y(), kMrptY, kTolPos);
+}
+
+TEST(Localizer, RoomWithoutFreeCellIsAnInputError) {
+  Localizer loc(demoMap(), LocalizationParams{});
+  try {
+    loc.initInRegion([](double x, double) { return x > 1000; }, "room 'nowhere'");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("room 'nowhere' contains no free cell"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace carenav::localization

@@ -5,6 +5,7 @@
 #include <carenav/io/trajectory.h>
 #include <carenav/localization/localizer.h>
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,11 +23,19 @@ struct InitialPose {
 InitialPose parseInitialPose(const std::string& text);
 
 struct LocalizeJobOptions {
-  std::string map, rawlog, out_dir;
-  std::string ref;  ///< optional reference trajectory (TUM) for ATE
+  std::string map, rawlog;
+  std::string out_dir;  ///< empty: nothing is written (the result alone)
+  std::string ref;      ///< optional reference trajectory (TUM) for ATE
   LocalizationParams params;
-  std::optional<InitialPose> init;  ///< exactly one of init and global
+  std::optional<InitialPose> init;  ///< exactly one of init, global and region
   bool global = false;
+  /** Global start restricted to a region (a room): its name for messages and
+   *  the summary, and the point-in-region test. */
+  struct Region {
+    std::string name;
+    std::function<bool(double x, double y)> inside;
+  };
+  std::optional<Region> region;
   double map_resolution = 0.05;  ///< m, cell size of a grid built from a .simplemap
   bool progress = true;
 };
@@ -47,6 +56,7 @@ struct LocalizeJobResult {
   std::vector<LocalizationEvent> events;
   std::optional<double> convergence_time;  ///< s since the first scan
   bool converged_at_end = false;
+  double final_spread = 0;                  ///< m, particle spread after the last scan
   double seconds = 0;                       ///< wall time (map loading excluded)
   bool index_times = false;                 ///< the rawlog had no timestamps: t is the scan index
   std::optional<double> ate_rmse, ate_max;  ///< m, with a reference
@@ -56,7 +66,7 @@ struct LocalizeJobResult {
   std::string summaryJson(const LocalizeJobOptions& o) const;
 };
 
-/** Runs the job and writes DIR/{track.tum, track_cov.csv, map.png,
+/** Runs the job and, unless out_dir is empty, writes DIR/{track.tum, track_cov.csv, map.png,
  *  summary.json}. Throws InputError for a bad map, rawlog, initial pose or
  *  reference, and when the rawlog has no usable 2D scan. A rawlog that breaks
  *  part way keeps what was read (result.rawlog_error). */

@@ -11,6 +11,7 @@
 #include <mrpt/slam/CMonteCarloLocalization2D.h>
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -60,6 +61,12 @@ class Localizer {
   /** Particles uniformly over the free cells, any heading; global_particles
    *  of them, at most particles_max. */
   void initGlobal();
+  /** Particles uniformly over the free cells whose centres satisfy
+   *  `inside(x, y)` (a room of the places file, say), any heading;
+   *  global_particles of them, at most particles_max. Recovery still injects
+   *  over the whole map. Throws InputError naming `what` when no free cell
+   *  is inside. */
+  void initInRegion(const std::function<bool(double x, double y)>& inside, const std::string& what);
 
   /** One scan and the odometry increment since the previous scan (robot
    *  frame of the previous scan). The filter runs on the first scan and then
@@ -83,7 +90,9 @@ class Localizer {
   const LocalizationParams& params() const { return p_; }
 
  private:
-  mrpt::math::TPose2D randomFreePose() const;
+  mrpt::math::TPose2D randomFreePose() const { return randomPoseIn(free_cells_); }
+  mrpt::math::TPose2D randomPoseIn(const std::vector<size_t>& cells) const;
+  void initUniform(const std::vector<size_t>& cells);
   void refreshEstimate();
   size_t inject(double fraction);
 
