@@ -4,6 +4,8 @@
 #include <carenav/common/crash_guard.h>
 #include <carenav/common/errors.h>
 #include <carenav/localization/localization_params.h>
+#include <carenav/perception/perception_params.h>
+#include <carenav/sim/sim_params.h>
 #include <carenav/slam/slam_params.h>
 
 #include <algorithm>
@@ -41,6 +43,8 @@ int main(int argc, char** argv) {
   // Every module's profile sections, so `profile check` knows all keys.
   slam::registerProfileSections();
   localization::registerProfileSections();
+  perception::registerProfileSections();
+  sim::registerProfileSections();
   CLI::App app{
       "carenav: mapping, localisation and navigation for assistive indoor robots "
       "(walkers, social and care robots), on MRPT.\n"

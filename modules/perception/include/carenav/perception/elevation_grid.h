@@ -1,0 +1,59 @@
+// 2.5D elevation grid (seed 001 sec. III-A; SPEC.md sec. 2).
+#pragma once
+
+#include <carenav/perception/cloud.h>
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace carenav::perception {
+
+/** One elevation voxel: z-, z+, N_z and the running mean/variance of z. */
+struct ElevationCell {
+  float z_lo = 0, z_hi = 0;  ///< z-, z+
+  uint32_t n = 0;            ///< N_z (0: no information)
+  double mean = 0, m2 = 0;   ///< Welford running mean and sum of squared deviations
+  double variance() const { return n > 1 ? m2 / (n - 1) : 0.0; }
+  void add(float z);
+};
+
+/** m x m cells of size d_r centred on the robot (robot frame: x forward,
+ *  y left, z up). Cell (i, j): i along x, j along y; the robot is at the
+ *  centre of the grid. */
+class ElevationGrid {
+ public:
+  ElevationGrid(int cells, double resolution);
+  int cells() const { return m_; }
+  double resolution() const { return r_; }
+  /** Adds the valid points of `robot_frame` (z within [z_min, z_max]), then,
+   *  when outlier_sigma > 0, removes per cell the elevations farther than
+   *  outlier_sigma standard deviations from the cell mean and recomputes z-,
+   *  z+, N_z, mean and variance (001 Fig. 4). Returns the points used. */
+  size_t build(const Cloud& robot_frame, double z_min, double z_max, double outlier_sigma);
+  void clear();
+
+  const ElevationCell& at(int i, int j) const { return cells_[idx(i, j)]; }
+  bool inside(int i, int j) const { return i >= 0 && j >= 0 && i < m_ && j < m_; }
+  bool valid(int i, int j) const { return inside(i, j) && cells_[idx(i, j)].n > 0; }
+  /** Cell of a robot-frame position (may be outside). */
+  int cellOf(double v) const { return static_cast<int>(std::floor(v / r_ + m_ * 0.5)); }
+  double centre(int i) const { return (i + 0.5 - m_ * 0.5) * r_; }
+  size_t validCells() const { return valid_; }
+  size_t outliersRemoved() const { return outliers_; }
+
+  /** Inverse-distance weighted elevation (cell means) at robot-frame (x, y)
+   *  over the s x s window of cells around it; nullopt when the window holds
+   *  no valid cell (001 sec. IV: IDW). */
+  std::optional<double> idw(double x, double y, int s) const;
+
+ private:
+  size_t idx(int i, int j) const { return static_cast<size_t>(i) * m_ + j; }
+  int m_;
+  double r_;
+  std::vector<ElevationCell> cells_;
+  std::vector<int32_t> point_cell_;  // scratch: cell of each point (-1 unused)
+  size_t valid_ = 0, outliers_ = 0;
+};
+
+}  // namespace carenav::perception

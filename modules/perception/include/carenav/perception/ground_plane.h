@@ -1,0 +1,73 @@
+// Ground-plane detection: RRT-GPD (seed 001 Alg. 1, SPEC.md sec. 2) and the
+// RANSAC-only baseline.
+#pragma once
+
+#include <carenav/perception/elevation_grid.h>
+#include <carenav/perception/perception_params.h>
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <optional>
+#include <random>
+#include <vector>
+
+namespace carenav::perception {
+
+/** a x + b y + c z + d = 0 with (a, b, c) a unit normal and c >= 0 (up). */
+struct Plane {
+  double a = 0, b = 0, c = 1, d = 0;
+  Eigen::Vector3d normal() const { return {a, b, c}; }
+  double signedDistance(double x, double y, double z) const { return a * x + b * y + c * z + d; }
+  double distance(double x, double y, double z) const { return std::abs(signedDistance(x, y, z)); }
+  /** Elevation of the plane at (x, y); nullopt for (near-)vertical planes. */
+  std::optional<double> zAt(double x, double y) const;
+  /** Plane through `p` with normal `n` (normalised and turned up). */
+  static Plane fromPointNormal(const Eigen::Vector3d& p, Eigen::Vector3d n);
+};
+
+/** Total least-squares plane (smallest principal axis). nullopt when there
+ *  are fewer than 3 points or they are (nearly) collinear. */
+std::optional<Plane> fitPlane(const std::vector<Eigen::Vector3d>& pts);
+
+struct RansacResult {
+  std::optional<Plane> plane;
+  size_t inliers = 0;
+};
+/** RANSAC plane (3-point hypotheses, `threshold` inlier distance), refined
+ *  by least squares on the inliers of the best hypothesis. */
+RansacResult ransacPlane(const std::vector<Eigen::Vector3d>& pts, int iterations, double threshold,
+                         std::mt19937& rng);
+
+/** One RRT node: centre (x, y, z), local plane normal, parent index (-1: root). */
+struct RrtNode {
+  Eigen::Vector3d p;
+  Eigen::Vector3d n;
+  int parent = -1;
+};
+
+struct GroundPlaneResult {
+  std::optional<Plane> plane;  ///< robot frame, normal up; nullopt: no ground found
+  std::vector<RrtNode> nodes;  ///< the tree (RRT-GPD only)
+  bool seed_found = false;
+  int iterations = 0;           ///< RRT iterations run
+  int expansions_rejected = 0;  ///< candidate nodes that failed both tests
+  size_t ransac_inliers = 0;
+};
+
+/** Local plane of the s x s neighbourhood centred on robot-frame (x, y): one
+ *  point per cell (cell mean, or IDW from the window when the cell is empty);
+ *  least squares (SPEC: fitPlane). */
+std::optional<Plane> localPlane(const ElevationGrid& g, double x, double y, int s);
+
+/** RRT-GPD, 001 Alg. 1 with SPEC.md's decisions. Deterministic for a given
+ *  params.seed. */
+GroundPlaneResult detectGroundRrt(const ElevationGrid& g, const PerceptionParams& p);
+
+/** Baseline: RANSAC over the points themselves (what a PCL SACSegmentation
+ *  user runs), on a seeded subsample of at most `max_points` points; no
+ *  orientation prior. */
+GroundPlaneResult detectGroundRansac(const Cloud& robot_frame, const PerceptionParams& p,
+                                     size_t max_points = 20000);
+
+}  // namespace carenav::perception

@@ -1,0 +1,136 @@
+#include <carenav/common/profile.h>
+#include <carenav/perception/perception_params.h>
+
+#include <sstream>
+
+namespace carenav::perception {
+
+namespace {
+std::optional<std::vector<double>> parseHeights(const std::string& text) {
+  std::vector<double> out;
+  std::string t = text;
+  for (char& c : t)
+    if (c == ',') c = ' ';
+  std::istringstream ss(t);
+  std::string tok;
+  while (ss >> tok) {
+    try {
+      out.push_back(parseReal(tok));
+    } catch (const ParamValueError&) {
+      return std::nullopt;
+    }
+  }
+  if (out.empty()) return std::nullopt;
+  return out;
+}
+}  // namespace
+
+std::vector<double> PerceptionParams::kosHeights() const {
+  auto h = parseHeights(kos_heights);
+  return h ? *h : std::vector<double>{};
+}
+
+const ParamTable<PerceptionParams>& PerceptionParams::table() {
+  using P = PerceptionParams;
+  static const auto t =
+      ParamTable<P>()
+          .text("sensor", &P::sensor,
+                "sensorLabel of the 3D observations to use (empty: every 3D observation)")
+          .integer("grid_cells", &P::grid_cells, "", 10, 2000,
+                   "m_x = m_y: cells per side of the robot-centred local grids (001 Table I)")
+          .real("resolution", &P::resolution, "m", 0.01, 1, "d_r: cell size (001 Table I)")
+          .real("outlier_sigma", &P::outlier_sigma, "", 0, 10,
+                "per-cell outlier removal: drop elevations farther than this many standard "
+                "deviations from the cell mean (0: off)")
+          .real("z_min", &P::z_min, "m", -100, 100, "points below (robot frame) are ignored")
+          .real("z_max", &P::z_max, "m", -100, 100, "points above (robot frame) are ignored")
+          .integer("rrt_iterations", &P::rrt_iterations, "", 1, 100000,
+                   "K: RRT-GPD iterations (001 Table I)")
+          .real("normal_threshold", &P::normal_threshold, "", 0, 1,
+                "N_th: similar normals when 1 - |n1.n2| <= N_th (001 Table I)")
+          .real("elevation_threshold", &P::elevation_threshold, "m", 0, 10,
+                "E_th: largest elevation step between connected nodes (001 Table I)")
+          .integer("window", &P::window, "cells", 3, 31,
+                   "s_x = s_y: neighbourhood of plane fits and IDW (001 Table I)")
+          .real("expansion_distance", &P::expansion_distance, "m", 0.01, 10,
+                "d_n: RRT node expansion distance (001 Table I)")
+          .flag("seed_upright", &P::seed_upright,
+                "the RRT seed plane must also pass the normal test against the robot's up axis")
+          .integer("seed_attempts", &P::seed_attempts, "", 1, 1000,
+                   "RRT-GPD: seeds tried (each at least d_n from the others) while the tree "
+                   "stays smaller than min_tree_nodes")
+          .integer("min_tree_nodes", &P::min_tree_nodes, "", 1, 100000,
+                   "RRT-GPD: a tree with this many nodes is accepted")
+          .real("seed_max_elevation", &P::seed_max_elevation, "m", 0, 100,
+                "the RRT seed must lie within this height of the floor the robot stands on "
+                "(robot frame z = 0): the robot pose is the seed's initial guess (001 Alg. 1)")
+          .integer("ransac_iterations", &P::ransac_iterations, "", 1, 100000,
+                   "iterations of the RANSAC plane fits")
+          .real("ransac_threshold", &P::ransac_threshold, "m", 0.001, 1,
+                "inlier distance of the RANSAC plane fits")
+          .integer("seed", &P::seed, "", 0, 2147483647, "random seed")
+          .real("d_pth", &P::d_pth, "m", 0, 1,
+                "voxels farther than this from the ground plane are obstacles (001 Table I)")
+          .real("k_g", &P::k_g, "", 0, 0.5, "K_g: ground amplitude gain (001 Table I)")
+          .real("sigma2", &P::sigma2, "m^2", 1e-6, 10, "sigma^2: ISM Gaussian variance")
+          .real("k_n", &P::k_n, "", 0, 10, "K_n: voxel density sample normalisation factor")
+          .real("d_min", &P::d_min, "", 0, 1000, "d_min: voxel density minimum number of points")
+          .real("k_m", &P::k_m, "", 0, 1, "K_m: voxel density amplitude gain")
+          .real("occupied_threshold", &P::occupied_threshold, "", 0.5, 1,
+                "cells whose occupancy probability is above count as occupied")
+          .real("free_threshold", &P::free_threshold, "", 0, 0.5,
+                "cells whose occupancy probability is below count as free")
+          .real("logodds_max", &P::logodds_max, "", 0.1, 50,
+                "clamp of the fused log-odds (keeps the local grid responsive)")
+          .real("band_z_min", &P::band_z_min, "m", -10, 10,
+                "height-band baseline: lowest obstacle height (000 sec. 5.3)")
+          .real("band_z_max", &P::band_z_max, "m", -10, 10,
+                "height-band baseline: highest obstacle height")
+          .real("depth_min", &P::depth_min, "m", 0, 100, "shortest valid depth")
+          .real("depth_max", &P::depth_max, "m", 0, 100, "longest valid depth")
+          .integer("fspf_n_min", &P::fspf_n_min, "", 3, 100000,
+                   "FSPF+ nMin: fewest inliers of an accepted plane (003 Table 3.1)")
+          .integer("fspf_omega", &P::fspf_omega, "px", 1, 10000,
+                   "FSPF+ Omega: neighbourhood of the second and third samples")
+          .real("fspf_window", &P::fspf_window, "m", 0.01, 10,
+                "FSPF+ A: plane size in world space of the local window")
+          .real("fspf_epsilon", &P::fspf_epsilon, "m", 0.001, 1,
+                "FSPF+ epsilon: inlier distance of the local RANSAC")
+          .real("fspf_stop_fraction", &P::fspf_stop_fraction, "", 0, 1,
+                "FSPF+ stops when this share of the eligible pixels is left (0.01 offline, "
+                "0.1 real time)")
+          .text("kos_heights", &P::kos_heights,
+                "Kinect Obstacle Scan: scan heights in m (robot frame), space separated")
+          .real("kos_band", &P::kos_band, "m", 0.001, 10, "KOS: half-height of each slab")
+          .real("scan_resolution", &P::scan_resolution, "deg", 0.05, 10,
+                "virtual scans: bearing bin width")
+          .real("maxrule_height", &P::maxrule_height, "m", -10, 10,
+                "max-rule localisation scan: height of the scan plane (robot frame)")
+          .real("maxrule_slab", &P::maxrule_slab, "m", 0.001, 10,
+                "max-rule localisation scan: slab thickness around the scan plane")
+          .check([](const P& p) -> std::optional<std::string> {
+            if (p.window % 2 == 0) return "window must be odd";
+            return std::nullopt;
+          })
+          .check([](const P& p) -> std::optional<std::string> {
+            if (p.z_min >= p.z_max) return "z_min must be smaller than z_max";
+            if (p.band_z_min >= p.band_z_max) return "band_z_min must be smaller than band_z_max";
+            if (p.depth_min >= p.depth_max) return "depth_min must be smaller than depth_max";
+            return std::nullopt;
+          })
+          .check([](const P& p) -> std::optional<std::string> {
+            if (!parseHeights(p.kos_heights))
+              return "kos_heights must list one or more heights in m";
+            return std::nullopt;
+          });
+  return t;
+}
+
+void registerProfileSections() {
+  ProfileSchemas::instance().add(SectionSchema::of(
+      PerceptionParams::table(), "perception",
+      "3D point clouds to 2.5D elevation grid, RRT-GPD ground plane and 2D local occupancy "
+      "grid; virtual 2D scans from depth"));
+}
+
+}  // namespace carenav::perception

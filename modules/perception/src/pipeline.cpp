@@ -1,0 +1,349 @@
+#include <carenav/common/errors.h>
+#include <carenav/common/json.h>
+#include <carenav/common/progress.h>
+#include <carenav/io/map_io.h>
+#include <carenav/io/rawlog_reader.h>
+#include <carenav/perception/pipeline.h>
+
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+namespace carenav::perception {
+
+Method parseMethod(const std::string& n) {
+  if (n == "rrt-gpd") return Method::RrtGpd;
+  if (n == "ransac") return Method::Ransac;
+  if (n == "height-band") return Method::HeightBand;
+  if (n == "mrpt-2dscan") return Method::Mrpt2DScan;
+  throw InputError("--method '" + n + "': expected rrt-gpd, ransac, height-band or mrpt-2dscan");
+}
+
+const char* methodName(Method m) {
+  switch (m) {
+    case Method::RrtGpd:
+      return "rrt-gpd";
+    case Method::Ransac:
+      return "ransac";
+    case Method::HeightBand:
+      return "height-band";
+    default:
+      return "mrpt-2dscan";
+  }
+}
+
+double FrameResult::timing(const std::string& stage) const {
+  for (const auto& [k, v] : timing_ms)
+    if (k == stage) return v;
+  return 0;
+}
+
+Pipeline::Pipeline(const PerceptionParams& p, Method m)
+    : p_(p),
+      method_(m),
+      elev_(p.grid_cells, p.resolution),
+      grid_(p.grid_cells, p.resolution, p.logodds_max) {}
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+}  // namespace
+
+FrameResult Pipeline::process(const FrameInput& in, bool virtual_scans) {
+  FrameResult r;
+  const auto t_all = Clock::now();
+  grid_.moveTo(in.odometry);
+  static const Cloud kEmpty;
+  const Cloud& c = in.cloud ? *in.cloud : kEmpty;
+  r.points_total = c.points.size();
+  r.points_valid = c.validCount();
+  r.plane_source = "none";
+  grid_.beginFrame();
+  if (method_ == Method::RrtGpd || method_ == Method::Ransac) {
+    auto t = Clock::now();
+    elev_.build(c, p_.z_min, p_.z_max, p_.outlier_sigma);
+    r.timing_ms.emplace_back("elevation_grid", msSince(t));
+    t = Clock::now();
+    if (elev_.validCells() > 0) {
+      r.ground = method_ == Method::RrtGpd ? detectGroundRrt(elev_, p_) : detectGroundRansac(c, p_);
+      if (r.ground.plane) {
+        r.plane = r.ground.plane;
+        r.plane_source = methodName(method_);
+      } else {
+        r.plane = Plane{};  // nothing plane-like seen: the floor the robot stands on
+        r.plane_source = "nominal";
+      }
+    }
+    r.timing_ms.emplace_back("ground_plane", msSince(t));
+    t = Clock::now();
+    if (r.plane) r.ism = integrateIsm(elev_, *r.plane, p_, grid_, &r.voxel_classes);
+    r.timing_ms.emplace_back("ism", msSince(t));
+  } else if (method_ == Method::HeightBand) {
+    auto t = Clock::now();
+    integrateHeightBand(c, p_, grid_);
+    r.timing_ms.emplace_back("height_band", msSince(t));
+  } else {
+    auto t = Clock::now();
+    if (!in.depth_obs)
+      throw InputError(
+          "--method mrpt-2dscan needs depth images (CObservation3DRangeScan in a rawlog)");
+    r.mrpt_scan = mrptConvertTo2DScan(*in.depth_obs, p_);
+    r.timing_ms.emplace_back("convert_2d_scan", msSince(t));
+    t = Clock::now();
+    integrateScan(*r.mrpt_scan, grid_);
+    r.timing_ms.emplace_back("scan_insertion", msSince(t));
+  }
+  grid_.endFrame();
+  if (virtual_scans) {
+    auto t = Clock::now();
+    if (c.organised()) {
+      r.fspf = fspfPlus(c, in.sensor_origin, p_);
+      r.timing_ms.emplace_back("fspf", msSince(t));
+      t = Clock::now();
+      r.kos = kinectObstacleScan(r.fspf->filtered, p_);
+    } else {
+      r.kos = kinectObstacleScan(c, p_);
+    }
+    r.timing_ms.emplace_back("kos", msSince(t));
+    t = Clock::now();
+    r.maxrule = maxRuleScan(c, p_);
+    r.timing_ms.emplace_back("maxrule", msSince(t));
+  }
+  r.counts = grid_.counts(p_.free_threshold, p_.occupied_threshold);
+  r.timing_ms.emplace_back("total", msSince(t_all));
+  return r;
+}
+
+mrpt::img::CImage Pipeline::render(const FrameResult& r) const {
+  const int m = grid_.cells();
+  mrpt::img::CImage img(m, m, mrpt::img::CH_RGB);
+  auto put = [&](int i, int j, uint8_t R, uint8_t G, uint8_t B) {
+    if (!grid_.inside(i, j)) return;
+    const int row = m - 1 - i, col = m - 1 - j;  // x forward up, y left to the left
+    uint8_t* px = img(col, row);
+    px[0] = B;  // CImage stores BGR
+    px[1] = G;
+    px[2] = R;
+  };
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      const double p = grid_.prob(i, j);
+      uint8_t v;
+      if (p > p_.occupied_threshold)
+        v = static_cast<uint8_t>(std::lround(90 * (1 - p) / (1 - p_.occupied_threshold)));
+      else if (p < p_.free_threshold)
+        v = static_cast<uint8_t>(std::lround(200 + 55 * (1 - p / p_.free_threshold)));
+      else
+        v = 150;
+      put(i, j, v, v, v);
+    }
+  const auto& rb = grid_.robot();
+  const double ca = std::cos(rb.phi()), sa = std::sin(rb.phi());
+  auto toGrid = [&](double x, double y, int& gi, int& gj) {
+    gi = grid_.cellX(rb.x() + ca * x - sa * y);
+    gj = grid_.cellY(rb.y() + sa * x + ca * y);
+  };
+  if (!r.voxel_classes.empty()) {
+    const int me = elev_.cells();
+    for (int i = 0; i < me; ++i)
+      for (int j = 0; j < me; ++j) {
+        const VoxelClass vc = r.voxel_classes[static_cast<size_t>(i) * me + j];
+        if (vc == VoxelClass::None) continue;
+        int gi, gj;
+        toGrid(elev_.centre(i), elev_.centre(j), gi, gj);
+        if (vc == VoxelClass::Ground)
+          put(gi, gj, 90, 200, 90);
+        else
+          put(gi, gj, 200, 30, 30);
+      }
+  }
+  for (const auto& n : r.ground.nodes) {
+    int gi, gj;
+    toGrid(n.p.x(), n.p.y(), gi, gj);
+    put(gi, gj, 30, 60, 230);
+  }
+  const int rad = std::max(2, static_cast<int>(0.15 / grid_.resolution()));
+  const int ri = grid_.cellX(rb.x()), rj = grid_.cellY(rb.y());
+  for (int di = -rad; di <= rad; ++di)
+    for (int dj = -rad; dj <= rad; ++dj)
+      if (di * di + dj * dj <= rad * rad) put(ri + di, rj + dj, 255, 140, 0);
+  for (int k = 0; k <= 2 * rad; ++k) {
+    const double s = k * grid_.resolution();
+    put(grid_.cellX(rb.x() + ca * s), grid_.cellY(rb.y() + sa * s), 120, 40, 0);
+  }
+  return img;
+}
+
+// ------------------------------------------------------------------ job
+
+namespace {
+
+void writePlane(JsonWriter& j, const std::optional<Plane>& pl) {
+  if (!pl) {
+    j.null();
+    return;
+  }
+  j.beginObject().key("a").value(pl->a).key("b").value(pl->b).key("c").value(pl->c);
+  j.key("d").value(pl->d).endObject();
+}
+
+size_t validRanges(const mrpt::obs::CObservation2DRangeScan& s) {
+  size_t n = 0;
+  for (size_t k = 0; k < s.getScanSize(); ++k) n += s.getScanRangeValidity(k) ? 1 : 0;
+  return n;
+}
+
+}  // namespace
+
+PerceiveResult runPerceive(const PerceiveOptions& o) {
+  namespace fs = std::filesystem;
+  if (o.rawlog.empty() == o.cloud.empty())
+    throw InputError("perceive: give exactly one of --rawlog and --cloud");
+  std::error_code ec;
+  fs::create_directories(o.out_dir, ec);
+  if (ec || !fs::is_directory(o.out_dir))
+    throw InputError(o.out_dir + ": cannot create the output folder");
+
+  PerceiveResult res;
+  Pipeline pipe(o.params, o.method);
+  JsonWriter j;
+  j.beginObject().key("method").value(methodName(o.method));
+  j.key("input").value(o.rawlog.empty() ? o.cloud : o.rawlog);
+  j.key("grid").beginObject().key("cells").value(o.params.grid_cells);
+  j.key("resolution").value(o.params.resolution).endObject();
+  j.key("frames").beginArray();
+  mrpt::io::CFileGZOutputStream scans_out;
+  const std::string scans_path = (fs::path(o.out_dir) / "virtual_scans.rawlog").string();
+  if (!scans_out.open(scans_path)) throw std::runtime_error(scans_path + ": cannot write");
+  auto scans_arch = mrpt::serialization::archiveFrom(scans_out);
+  double total_ms = 0;
+
+  auto handle = [&](Cloud& cloud, const Point3f& origin, mrpt::obs::CObservation3DRangeScan* obs,
+                    const mrpt::poses::CPose2D& odo, const std::string& label) {
+    FrameInput in;
+    in.cloud = &cloud;
+    in.sensor_origin = origin;
+    in.depth_obs = obs;
+    in.odometry = odo;
+    const FrameResult r = pipe.process(in, true);
+    const size_t f = res.frames++;
+    char name[64];
+    std::snprintf(name, sizeof(name), "frame_%04zu", f);
+    const fs::path base = fs::path(o.out_dir) / name;
+    const std::string png = base.string() + ".png", gm = base.string() + ".gridmap.gz";
+    if (!pipe.render(r).saveToFile(png)) throw std::runtime_error(png + ": cannot write");
+    io::saveGridMap(pipe.grid().toMrpt(), gm);
+    res.outputs.push_back(png);
+    res.outputs.push_back(gm);
+    for (auto* s : {&r.kos, &r.maxrule, &r.mrpt_scan})
+      if (*s) scans_arch << **s;
+    total_ms += r.timing("total");
+    j.beginObject().key("index").value(static_cast<uint64_t>(f)).key("sensor").value(label);
+    j.key("points").value(static_cast<uint64_t>(r.points_total));
+    j.key("valid_points").value(static_cast<uint64_t>(r.points_valid));
+    j.key("ground_plane");
+    writePlane(j, r.plane);
+    j.key("plane_source").value(r.plane_source);
+    if (r.plane) j.key("plane_tilt_deg").value(std::acos(std::min(1.0, r.plane->c)) * 180 / M_PI);
+    j.key("rrt_nodes").value(static_cast<uint64_t>(r.ground.nodes.size()));
+    j.key("ransac_inliers").value(static_cast<uint64_t>(r.ground.ransac_inliers));
+    j.key("voxels").beginObject().key("total").value(static_cast<uint64_t>(r.ism.voxels));
+    j.key("ground").value(static_cast<uint64_t>(r.ism.ground_voxels));
+    j.key("obstacle").value(static_cast<uint64_t>(r.ism.obstacle_voxels)).endObject();
+    j.key("cells").beginObject().key("occupied").value(static_cast<uint64_t>(r.counts.occupied));
+    j.key("free").value(static_cast<uint64_t>(r.counts.free));
+    j.key("unknown").value(static_cast<uint64_t>(r.counts.unknown)).endObject();
+    j.key("scans").beginObject();
+    if (r.kos) j.key("kos_valid").value(static_cast<uint64_t>(validRanges(*r.kos)));
+    if (r.maxrule) j.key("maxrule_valid").value(static_cast<uint64_t>(validRanges(*r.maxrule)));
+    if (r.mrpt_scan)
+      j.key("mrpt_2dscan_valid").value(static_cast<uint64_t>(validRanges(*r.mrpt_scan)));
+    if (r.fspf) {
+      j.key("fspf_planes")
+          .value(r.fspf->planes)
+          .key("fspf_planes_dropped")
+          .value(r.fspf->planes_dropped);
+      j.key("fspf_points").value(static_cast<uint64_t>(r.fspf->filtered.points.size()));
+    }
+    j.endObject();
+    j.key("timing_ms").beginObject();
+    for (const auto& [k, v] : r.timing_ms) j.key(k).value(v);
+    j.endObject().key("png").value(fs::path(png).filename().string());
+    j.key("gridmap").value(fs::path(gm).filename().string()).endObject();
+  };
+
+  if (!o.cloud.empty()) {
+    if (!o.sensor_pose)
+      throw InputError(o.cloud +
+                       ": a single cloud needs the sensor pose: --sensor-pose "
+                       "x,y,z,yaw,pitch,roll or a depth-camera sensor in the profile");
+    Cloud cam = readCloudFile(o.cloud);
+    Cloud robot = toRobotFrame(cam, *o.sensor_pose, true);
+    const Point3f origin{static_cast<float>(o.sensor_pose->x()),
+                         static_cast<float>(o.sensor_pose->y()),
+                         static_cast<float>(o.sensor_pose->z())};
+    if (o.method == Method::Mrpt2DScan)
+      throw InputError(o.cloud +
+                       ": --method mrpt-2dscan needs depth images (CObservation3DRangeScan in "
+                       "a rawlog), not a point cloud file");
+    handle(robot, origin, nullptr, mrpt::poses::CPose2D(), "cloud");
+  } else {
+    io::RawlogReader reader(o.rawlog);
+    Progress prog("perceive", reader.fileSize(), false);
+    prog.setEnabled(prog.enabled() && o.progress);
+    mrpt::poses::CPose2D odo;
+    io::RawlogEntry e;
+    while ((o.max_frames == 0 || res.frames < o.max_frames) && reader.next(e)) {
+      if (e.odometry_increment) odo = odo + *e.odometry_increment;
+      for (const auto& obs : e.observations()) {
+        if (!obs || (!o.params.sensor.empty() && obs->sensorLabel != o.params.sensor)) continue;
+        std::optional<mrpt::poses::CPose3D> pose = o.sensor_pose;
+        if (!pose)
+          for (const auto& [label, pp] : o.profile_poses)
+            if (label == obs->sensorLabel) pose = pp;
+        auto cloud = cloudFromObservation(*obs, pose);
+        if (!cloud) continue;
+        mrpt::poses::CPose3D used = pose ? *pose : mrpt::poses::CPose3D();
+        if (!pose) obs->getSensorPose(used);
+        auto* depth = dynamic_cast<mrpt::obs::CObservation3DRangeScan*>(obs.get());
+        if (depth && pose) depth->sensorPose = *pose;
+        if (o.method == Method::Mrpt2DScan && !depth) continue;
+        handle(*cloud,
+               {static_cast<float>(used.x()), static_cast<float>(used.y()),
+                static_cast<float>(used.z())},
+               depth, odo, obs->sensorLabel);
+        if (o.max_frames && res.frames >= o.max_frames) break;
+      }
+      prog.update(reader.filePosition(), reader.entriesRead());
+    }
+    prog.finish();
+    if (res.frames == 0)
+      throw InputError(o.rawlog +
+                       ": no 3D observation (CObservation3DRangeScan, "
+                       "CObservationPointCloud, CObservationVelodyneScan)" +
+                       (o.params.sensor.empty() ? std::string()
+                                                : " with sensorLabel '" + o.params.sensor + "'") +
+                       (o.method == Method::Mrpt2DScan ? " with a depth image" : ""));
+  }
+  j.endArray();
+  j.key("frame_count").value(static_cast<uint64_t>(res.frames));
+  j.key("mean_total_ms").value(res.frames ? total_ms / res.frames : 0.0);
+  j.endObject();
+  scans_out.close();
+  res.outputs.push_back(scans_path);
+  const std::string sp = (fs::path(o.out_dir) / "summary.json").string();
+  std::ofstream sf(sp);
+  sf << j.str() << "\n";
+  if (!sf) throw std::runtime_error(sp + ": cannot write");
+  res.outputs.push_back(sp);
+  return res;
+}
+
+}  // namespace carenav::perception
