@@ -4,6 +4,7 @@
 #include <carenav/common/crash_guard.h>
 #include <carenav/common/errors.h>
 #include <carenav/localization/localization_params.h>
+#include <carenav/navigation/navigation_params.h>
 #include <carenav/perception/perception_params.h>
 #include <carenav/sim/sim_params.h>
 #include <carenav/slam/slam_params.h>
@@ -43,6 +44,7 @@ int main(int argc, char** argv) {
   // Every module's profile sections, so `profile check` knows all keys.
   slam::registerProfileSections();
   localization::registerProfileSections();
+  navigation::registerProfileSections();
   perception::registerProfileSections();
   sim::registerProfileSections();
   CLI::App app{

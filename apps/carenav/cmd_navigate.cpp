@@ -1,0 +1,146 @@
+// carenav navigate --scenario S.yaml | --suite DIR  [--profile P] [--plugin NAME[,NAME...]]
+//                  [--out DIR] [--json]
+#include <carenav/common/errors.h>
+#include <carenav/navigation/local_planner.h>
+#include <carenav/navigation/scenario.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "commands.h"
+
+namespace carenav::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct NavigateArgs {
+  std::string scenario, suite, profile, plugins, out;
+  std::vector<std::string> sets;
+  bool json = false;
+  double rate = 10;
+};
+
+std::vector<std::string> splitComma(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+std::string cell(double v, int prec = 2) {
+  if (std::isnan(v)) return "-";
+  char b[32];
+  std::snprintf(b, sizeof b, "%.*f", prec, v);
+  return b;
+}
+
+void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
+  auto a = std::make_shared<NavigateArgs>();
+  std::string plugin_help = "Local method(s), comma-separated, run side by side:";
+  for (const auto& [n, d] : navigation::PlannerRegistry::instance().list())
+    plugin_help += " " + n + " (" + d + ");";
+  plugin_help += " default: the scenario's, else the profile's [navigation] plugin";
+  auto* cmd = app.add_subcommand(
+      "navigate",
+      "Run navigation scenarios headless in the built-in simulator, faster than real time: a "
+      "walker pushed by a scripted user (user-intent-dwa) or a robot sent to a goal (goal-dwa, "
+      "A* route, localisation on the world's map), with the safety supervisor around the "
+      "plugin. Reports success, collisions, clearance, duration, path length, speed and the "
+      "walker's intent fidelity; with --out, a PNG of each run, its navigation log (CSV) and "
+      "summary.json.");
+  auto* sc = cmd->add_option("--scenario", a->scenario, "One scenario file (docs/navigate.md)");
+  auto* su = cmd->add_option("--suite", a->suite, "A folder: every *.yaml scenario in it");
+  sc->excludes(su);
+  cmd->add_option("--profile", a->profile,
+                  "Robot profile (default: the scenario's 'profile:'); its [robot], sensors, "
+                  "[navigation], [localization] and [sim] sections");
+  cmd->add_option("--plugin", a->plugins, plugin_help);
+  cmd->add_option("--set", a->sets, "Override a profile value: section.key=value (repeatable)");
+  cmd->add_option("--out", a->out,
+                  "Output folder: one subfolder per run (run.png, navlog.csv, "
+                  "summary.json)");
+  cmd->add_option("--rate", a->rate, "Control rate, Hz (default 10)")
+      ->check(CLI::Range(1.0, 100.0));
+  cmd->add_flag("--json", a->json, "Print the metrics of every run as JSON");
+  cmd->callback([a, &g] {
+    std::vector<std::string> files;
+    if (!a->scenario.empty()) {
+      files.push_back(a->scenario);
+    } else if (!a->suite.empty()) {
+      if (!fs::is_directory(a->suite)) throw InputError(a->suite + ": not a folder");
+      for (const auto& e : fs::directory_iterator(a->suite))
+        if (e.path().extension() == ".yaml" &&
+            e.path().string().find(".places.") == std::string::npos)
+          files.push_back(e.path().string());
+      std::sort(files.begin(), files.end());
+      if (files.empty()) throw InputError(a->suite + ": no *.yaml scenario in it");
+    } else {
+      throw InputError("navigate: give --scenario FILE or --suite DIR");
+    }
+    std::vector<navigation::Scenario> scenarios;
+    for (const auto& f : files) scenarios.push_back(navigation::readScenario(f));
+    const auto plugins = splitComma(a->plugins);
+    const bool single = scenarios.size() == 1 && plugins.size() <= 1;
+
+    std::vector<navigation::RunMetrics> runs;
+    for (const auto& s : scenarios) {
+      std::vector<std::string> ps = plugins.empty() ? std::vector<std::string>{""} : plugins;
+      for (const auto& p : ps) {
+        navigation::RunOptions o;
+        o.plugin = p;
+        o.profile = a->profile;
+        o.sets = a->sets;
+        o.control_rate = a->rate;
+        o.progress = !g.quiet;
+        if (!a->out.empty())
+          o.out_dir = (fs::path(a->out) / (s.name + (p.empty() ? "" : "-" + p))).string();
+        try {
+          runs.push_back(navigation::runScenario(s, o));
+        } catch (const InputError& e) {
+          // A plugin that does not fit the scenario (walker vs goal) is
+          // skipped in a side-by-side run; alone it is an error.
+          const std::string w = e.what();
+          if (single || w.find("this scenario") == std::string::npos) throw;
+          if (!g.quiet) std::cerr << "[navigate] skipped: " << w << "\n";
+        }
+      }
+    }
+    if (a->json) {
+      std::cout << "[\n";
+      for (size_t i = 0; i < runs.size(); ++i)
+        std::cout << runs[i].toJson() << (i + 1 < runs.size() ? ",\n" : "\n");
+      std::cout << "]\n";
+    } else {
+      std::printf("%-24s %-16s %-7s %5s %7s %7s %7s %7s %6s %8s %7s  %s\n", "scenario", "plugin",
+                  "success", "coll", "minclr", "meanclr", "time_s", "path_m", "v_mps", "fidelity",
+                  "cyc_ms", "outcome");
+      for (const auto& r : runs)
+        std::printf("%-24s %-16s %-7s %5zu %7s %7s %7s %7s %6s %8s %7s  %s\n", r.scenario.c_str(),
+                    r.plugin.c_str(), r.success ? "yes" : "NO", r.collisions,
+                    cell(r.min_clearance_m).c_str(), cell(r.mean_clearance_m).c_str(),
+                    cell(r.duration_s, 1).c_str(), cell(r.path_length_m).c_str(),
+                    cell(r.mean_speed_mps).c_str(), cell(r.intent_fidelity, 3).c_str(),
+                    cell(r.cycle_ms_mean, 2).c_str(), r.outcome.c_str());
+      size_t ok = 0;
+      for (const auto& r : runs) ok += r.success;
+      std::printf("%zu of %zu runs succeeded\n", ok, runs.size());
+    }
+    if (!g.quiet)
+      for (const auto& r : runs)
+        for (const auto& f : r.outputs) std::cerr << "[navigate] wrote " << f << "\n";
+  });
+}
+
+}  // namespace
+
+CARENAV_COMMAND(60, addNavigateCommand);
+
+}  // namespace carenav::app

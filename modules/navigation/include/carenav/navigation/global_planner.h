@@ -1,0 +1,55 @@
+// Global route: A* on the static map inflated by the robot, never through
+// unknown or occupied cells (seed 004: HOBBIT once planned through unknown
+// space), with intermediate goals at the corners of the route (seed 002).
+#pragma once
+
+#include <carenav/navigation/navigation_params.h>
+
+#include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/math/TPoint2D.h>
+
+#include <optional>
+#include <vector>
+
+namespace carenav::navigation {
+
+using mrpt::math::TPoint2D;
+
+struct Route {
+  std::vector<TPoint2D> cells;      ///< centres of the cells of the A* path, start to goal
+  std::vector<TPoint2D> waypoints;  ///< corners (line-of-sight simplification), ending at the goal
+  double length = 0;                ///< m, along the waypoints
+};
+
+/** A* over the cells of a static occupancy grid. A cell is passable when it
+ *  is free (p_free above free_threshold) and farther than `robot_radius` +
+ *  plan_clearance from every cell that is not free (occupied or unknown).
+ *  Steps cost their length, more near obstacles (plan_cost_weight). */
+class GlobalPlanner {
+ public:
+  GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double robot_radius,
+                const NavigationParams& p, double free_threshold = 0.65);
+  /** nullopt when no route exists. Throws InputError when start or goal lie
+   *  outside the map or on a cell that is not free. */
+  std::optional<Route> plan(const TPoint2D& start, const TPoint2D& goal) const;
+  /** The cell at (x, y) is free space (not necessarily passable). */
+  bool isFree(double x, double y) const;
+  bool isPassable(double x, double y) const;
+  /** True when every segment of the polyline crosses passable cells only
+   *  (the first `skip` metres from its start excepted: the robot may stand
+   *  closer to an obstacle than the route may pass). */
+  bool polylineClear(const std::vector<TPoint2D>& pts, double skip = 0) const;
+  /** m, from (x, y) to the nearest cell that is not free. */
+  double clearance(double x, double y) const;
+
+ private:
+  bool cellPassable(int ix, int iy) const;
+  bool lineOfSight(int x0, int y0, int x1, int y1) const;
+  const mrpt::maps::COccupancyGridMap2D& map_;
+  int nx_ = 0, ny_ = 0;
+  double res_ = 0, radius_ = 0, influence_ = 0, weight_ = 0;
+  std::vector<uint8_t> free_;
+  std::vector<float> dist_;  // m to the nearest non-free cell
+};
+
+}  // namespace carenav::navigation

@@ -1,0 +1,129 @@
+// What the local planners see: recently sensed obstacles (with memory) and a
+// robot-centred grid with the distance to the nearest obstacle, queried with
+// the robot's footprint.
+#pragma once
+
+#include <carenav/common/params.h>
+#include <carenav/navigation/navigation_params.h>
+
+#include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/math/TPoint2D.h>
+#include <mrpt/math/TPose2D.h>
+
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace carenav::navigation {
+
+using mrpt::math::TPoint2D;
+using mrpt::math::TPose2D;
+
+/** One range scan in the world (odometry or map) frame: the sensor's
+ *  position and the end point of every ray; `hit[i]` is false for a ray that
+ *  saw nothing up to its maximum range (it only clears). */
+struct WorldScan {
+  TPoint2D origin;
+  std::vector<TPoint2D> ends;
+  std::vector<uint8_t> hit;
+  double range_min = 0;  ///< m, the sensor is blind closer than this (nothing is cleared there)
+};
+
+/** Obstacles seen recently, in the world frame, on a hash grid of cells.
+ *  A hit marks its cell with the scan time; a later ray that passes through
+ *  a marked cell clears it (a person who walked away); cells not seen for
+ *  `persistence` seconds, or farther than `radius` from the robot, are
+ *  dropped. This keeps obstacles that left a depth camera's blind zone
+ *  (HOBBIT, seed 004: obstacle memory of about 5 s). */
+class ObstacleMemory {
+ public:
+  ObstacleMemory(double resolution, double persistence, double radius);
+  void add(const WorldScan& scan, double t);
+  /** Adds bare obstacle points (no clearing), e.g. from a perception grid. */
+  void addPoints(const std::vector<TPoint2D>& points, double t);
+  /** Drops cells older than persistence or outside the radius. */
+  void prune(double now, const TPoint2D& robot);
+  std::vector<TPoint2D> points() const;  ///< cell centres
+  size_t size() const { return cells_.size(); }
+  void clear() { cells_.clear(); }
+
+ private:
+  int64_t key(double x, double y) const;
+  double res_, persistence_, radius_;
+  std::unordered_map<int64_t, double> cells_;  // cell -> last time seen
+};
+
+/** The robot's footprint with what the queries need. */
+struct Footprint {
+  std::vector<Point2> polygon;     ///< robot frame, m
+  double inscribed = 0;            ///< m, largest circle about the origin inside the polygon
+  double circumscribed = 0;        ///< m, smallest circle about the origin holding it
+  std::vector<TPoint2D> boundary;  ///< samples along the outline (robot frame)
+  std::vector<TPoint2D> interior;  ///< samples inside (robot frame)
+  Footprint() = default;
+  /** Samples the outline and the inside every `spacing` metres. Throws
+   *  InputError for fewer than 3 vertices or no area. */
+  Footprint(const std::vector<Point2>& polygon, double spacing);
+  bool contains(double x, double y) const;  ///< robot frame
+};
+
+/** Result of placing the footprint at a pose. */
+struct FootprintCheck {
+  bool collision =
+      false;             ///< an obstacle touches (within the padding) or lies inside the footprint
+  bool outside = false;  ///< part of the footprint leaves the local grid
+  double clearance = 0;  ///< m, footprint outline to the nearest obstacle (0 on collision)
+};
+
+/** A square grid of side `local_size` around a centre, with the Euclidean
+ *  distance from every cell to the nearest obstacle cell (exact distance
+ *  transform, Felzenszwalb and Huttenlocher 2012), a 0..100 cell cost
+ *  falling with that distance (seed 000 sec. 4.1.2: 0 free .. 100
+ *  occupied), and footprint queries. */
+class LocalCostmap {
+ public:
+  LocalCostmap(const NavigationParams& p, const Footprint& footprint);
+  /** Rebuilds around `centre` from obstacle points (world frame) and,
+   *  optionally, the occupied cells of a static map in the same frame
+   *  (cells with occupancy probability above `static_occupied`). */
+  void build(const TPoint2D& centre, const std::vector<TPoint2D>& obstacles,
+             const mrpt::maps::COccupancyGridMap2D* static_map = nullptr,
+             double static_occupied = 0.65);
+
+  bool inside(double x, double y) const;
+  /** m, from (x, y) to the nearest obstacle cell centre; `farValue()` when
+   *  there is no obstacle; 0 on an obstacle cell; -1 outside the grid. */
+  double distance(double x, double y) const;
+  double farValue() const { return far_; }
+  /** 0 (clear by cost_decay or more) .. 100 (obstacle cell); 100 outside. */
+  int cellCost(double x, double y) const;
+  FootprintCheck check(const TPose2D& pose) const;
+  /** Footprint clearance at the pose, capped at `cap` metres (cheaper when
+   *  the robot is far from everything). */
+  FootprintCheck check(const TPose2D& pose, double cap) const;
+
+  const Footprint& footprint() const { return fp_; }
+  double resolution() const { return res_; }
+  size_t obstacleCells() const { return obstacle_cells_; }
+  TPoint2D origin() const { return {x0_, y0_}; }
+  int size() const { return n_; }
+
+ private:
+  int cellX(double x) const;
+  int cellY(double y) const;
+  double res_, far_, decay_, contact_;
+  int n_ = 0;
+  double x0_ = 0, y0_ = 0;   // world coordinates of cell (0, 0)'s lower-left corner
+  std::vector<float> dist_;  // metres
+  size_t obstacle_cells_ = 0;
+  Footprint fp_;
+};
+
+/** Exact squared Euclidean distance transform of a binary grid (row-major,
+ *  nx by ny): input 0 for obstacle cells, anything else for free; output in
+ *  cells squared. Two passes of the 1D lower-envelope algorithm of
+ *  Felzenszwalb and Huttenlocher, "Distance Transforms of Sampled Functions",
+ *  Theory of Computing 8 (2012). */
+std::vector<float> squaredDistanceTransform(const std::vector<uint8_t>& free, int nx, int ny);
+
+}  // namespace carenav::navigation

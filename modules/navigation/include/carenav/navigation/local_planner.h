@@ -1,0 +1,129 @@
+// Local planners ("plugins", chosen by name in the profile): one control
+// cycle turns the robot's state, the local cost map and the user's command
+// or the route into a velocity command.
+#pragma once
+
+#include <carenav/common/robot.h>
+#include <carenav/navigation/local_map.h>
+#include <carenav/navigation/navigation_params.h>
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace carenav::navigation {
+
+/** A velocity command of a differential drive. */
+struct Twist {
+  double v = 0;  ///< m/s, forward
+  double w = 0;  ///< rad/s, counter-clockwise
+};
+
+/** Pose after moving for `t` seconds at constant (v, w) from `p` (exact arc). */
+TPose2D integrateArc(const TPose2D& p, double v, double w, double t);
+
+/** One sampled trajectory of the dynamic window, rolled out on the cost map. */
+struct Trajectory {
+  Twist cmd;
+  bool collides = false;         ///< the footprint hits an obstacle within the horizon
+  bool leaves_map = false;       ///< the footprint leaves the local grid within the horizon
+  double time_to_collision = 0;  ///< s, along the arc (the horizon when none)
+  double clearance = 0;          ///< m, smallest footprint clearance along the path (capped)
+  /** m, dist(v, w) of seed 000 Eq. 4.1: how far the footprint sweeps along
+   *  the arc before the first contact (path length plus the turn times the
+   *  circumscribed radius); infinity when it reaches the horizon free. */
+  double free_distance = 0;
+  /** s until that contact at this command (also beyond the horizon, as far
+   *  as the check went); infinity when none. */
+  double contact_time = 0;
+  double occupancy = 0;  ///< summed cell cost (0..100 per step) along the path
+  TPose2D end;           ///< pose at the end of the horizon (or of the last safe step)
+  double cost = 0;       ///< the planner's score, lower is better
+  bool admissible() const { return !collides && !leaves_map; }
+};
+
+/** Rolls (v, w) out from `start` for `horizon` seconds at `step`, checking
+ *  the footprint at every step; clearance capped at `clearance_cap`. When
+ *  the arc covers less than `check_distance` metres in the horizon, the
+ *  collision check (only) goes on until it does, so that a slow trajectory
+ *  is not taken for a free one because it stops short of the obstacle. */
+Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& cmd, double horizon,
+                   double step, double clearance_cap, double check_distance = 0);
+
+/** True when, braking at the robot's limits along the same arc from `cmd`,
+ *  the robot stops at least `margin` metres (of path) before the first
+ *  contact `time_to_collision` seconds ahead at that command (seed 000
+ *  Eq. 4.1 with proportional braking of v and w). */
+bool canBrake(const Twist& cmd, double time_to_collision, const RobotParams& robot, double margin);
+
+/** What a planner gets each cycle. Poses are in the cost map's frame. */
+struct PlannerInput {
+  double t = 0;
+  TPose2D pose;
+  Twist current;  ///< measured velocity
+  const LocalCostmap* map = nullptr;
+  std::optional<Twist> user;    ///< the user's command (walker)
+  std::vector<TPoint2D> path;   ///< global route ahead (goal navigation)
+  std::optional<TPose2D> goal;  ///< final goal (goal navigation)
+};
+
+/** What a planner answers. */
+struct PlannerOutput {
+  bool ok = false;  ///< false: no admissible trajectory (the supervisor stops)
+  Twist cmd;
+  std::string note;  ///< why not ok, or what it did ("turn in place")
+  size_t evaluated = 0, admissible = 0;
+  std::vector<Trajectory> trajectories;  ///< every candidate (for pictures and tests)
+};
+
+/** The dynamic window (seed 000 Eqs. 4.4-4.7): reachable velocities within
+ *  window_time at the robot's accelerations, inside its limits. */
+struct Window {
+  double v_lo = 0, v_hi = 0, w_lo = 0, w_hi = 0;
+};
+Window dynamicWindow(const Twist& current, const RobotParams& robot, const NavigationParams& p);
+/** Samples of the window: v_samples forward and v_samples backward (when
+ *  the window reaches below zero), w_samples across, always 0 and the
+ *  window's bounds; plus `extra` (clamped into the window). */
+std::vector<Twist> sampleWindow(const Window& w, const NavigationParams& p,
+                                const std::vector<Twist>& extra = {});
+
+/** A local method. */
+class LocalPlanner {
+ public:
+  virtual ~LocalPlanner() = default;
+  virtual std::string name() const = 0;
+  virtual PlannerOutput plan(const PlannerInput& in) = 0;
+  /** Walker-style planners need the user's command; goal planners a path. */
+  virtual bool needsUserIntent() const = 0;
+};
+
+using PlannerFactory =
+    std::function<std::unique_ptr<LocalPlanner>(const NavigationParams&, const RobotParams&)>;
+
+/** Local planners by name. The built-in ones (user-intent-dwa, goal-dwa)
+ *  are registered on first use. */
+class PlannerRegistry {
+ public:
+  static PlannerRegistry& instance();
+  void add(const std::string& name, const std::string& description, PlannerFactory f);
+  /** Throws InputError naming the known plugins for an unknown name. */
+  std::unique_ptr<LocalPlanner> create(const std::string& name, const NavigationParams& p,
+                                       const RobotParams& robot) const;
+  std::vector<std::pair<std::string, std::string>> list() const;  ///< name, description
+
+ private:
+  PlannerRegistry();
+  std::map<std::string, std::pair<std::string, PlannerFactory>> entries_;
+};
+
+/** Seed 000's shared control for a walker (Alg. 4, Eq. 4.10). */
+std::unique_ptr<LocalPlanner> makeUserIntentDwa(const NavigationParams& p, const RobotParams& r);
+/** Goal-directed DWA: heading to the next waypoint, clearance, speed,
+ *  distance to the route; turns in place when the waypoint is far off. */
+std::unique_ptr<LocalPlanner> makeGoalDwa(const NavigationParams& p, const RobotParams& r);
+
+}  // namespace carenav::navigation

@@ -1,0 +1,65 @@
+// Parameters of the navigation module: the profile's [navigation] section.
+#pragma once
+
+#include <carenav/common/params.h>
+
+#include <string>
+
+namespace carenav::navigation {
+
+/** [navigation]: local planning (dynamic window plugins), obstacle memory,
+ *  global route and safety supervisor. The robot's limits (v_max, v_min,
+ *  w_max, acc_v, acc_w, footprint, safe_distance) come from [robot].
+ *  ```ini
+ *  [navigation]
+ *  plugin = user-intent-dwa   ; user-intent-dwa | goal-dwa
+ *  sim_time = 7.0             ; s (seed 000 Table 5.1)
+ *  ```
+ */
+struct NavigationParams {
+  std::string plugin = "goal-dwa";  ///< local method, by name (LocalPlannerRegistry)
+  // Dynamic window and trajectory rollout (seed 000 Alg. 4, Table 5.1)
+  double sim_time = 3.0;     ///< s, horizon of each sampled trajectory (walker: 7.0)
+  double sim_step = 0.1;     ///< s, rollout step
+  double window_time = 0.5;  ///< s, time constant of the dynamic window (v +- acc_v * this)
+  int v_samples = 12;        ///< samples of v per direction (forward, and backward when allowed)
+  int w_samples = 11;        ///< samples of w across the window
+  // Cost of seed 000 Eq. 4.10 (user-intent DWA); k values are not in the seed
+  double k_s = 0.01;                 ///< weight of the summed cell cost along the path
+  double k_0 = 1.0;                  ///< m, weight of 1 / dist(v, w) (free distance along the arc)
+  double k_1 = 0.5;                  ///< penalty when the direction differs from the user's
+  double k_2 = 0.05;                 ///< weight of the end-pose distance term
+  double clearance_influence = 0.3;  ///< m, lateral clearance beyond this is not told apart
+  double obstacle_distance_cap = 2.0;  ///< m, arcs are checked at least this far; farther is free
+  // Goal DWA critics
+  double k_heading = 1.0;   ///< weight of the heading error to the next waypoint (rad)
+  double k_path = 0.5;      ///< weight of the end-pose distance to the global path (m)
+  double k_speed = 0.5;     ///< weight of (v_max - v) / v_max
+  double k_goal_obs = 0.3;  ///< s, goal DWA: weight of 1 / time to the nearest obstacle on the arc
+  double turn_in_place_deg = 60;  ///< turn on the spot when the waypoint is further off
+  double score_time = 1.5;        ///< s, goal critics are taken at the pose reached then
+  double lookahead = 1.0;         ///< m, waypoint distance along the path ahead of the robot
+  // Local cost map and obstacle memory (HOBBIT, seed 004)
+  double local_size = 8.0;            ///< m, side of the robot-centred local grid
+  double resolution = 0.05;           ///< m, cell size of the local grid
+  double obstacle_persistence = 5.0;  ///< s, seen obstacles are remembered this long
+  double memory_radius = 3.0;         ///< m, remembered obstacles farther away are dropped
+  double cost_decay = 0.3;            ///< m, cell cost falls from 100 to 0 over this clearance
+  double footprint_padding = 0.05;    ///< m, closer than this to an obstacle counts as contact
+  // Global route (A* on the inflated static map)
+  double plan_clearance = 0.1;  ///< m, extra clearance kept by the route beyond the footprint
+  double plan_cost_weight = 2;  ///< extra route cost per metre near obstacles (keeps paths central)
+  double goal_tolerance = 0.5;  ///< m, goal reached (seed 002)
+  double goal_tolerance_deg = 3;  ///< deg, heading at the goal (seed 002: 0.05 rad)
+  // Safety supervisor
+  double sensor_timeout = 0.5;    ///< s, stop when the newest scan is older
+  double odom_timeout = 0.5;      ///< s, stop when the newest odometry is older
+  double intent_timeout = 0.5;    ///< s, walker: stop when the user's command is older
+  double intent_deadband = 0.01;  ///< m/s and rad/s, user commands below count as "stop"
+  static const ParamTable<NavigationParams>& table();
+};
+
+/** Registers [navigation] with the profile schemas. */
+void registerProfileSections();
+
+}  // namespace carenav::navigation

@@ -1,0 +1,96 @@
+// The navigation loop of one robot, fed step by step: sensor data and
+// odometry in, a supervised velocity command out. Used by `carenav
+// navigate` with the simulator or a real robot's bridge.
+#pragma once
+
+#include <carenav/common/robot.h>
+#include <carenav/navigation/local_map.h>
+#include <carenav/navigation/local_planner.h>
+#include <carenav/navigation/navigation_params.h>
+#include <carenav/navigation/safety.h>
+
+#include <mrpt/obs/CObservation.h>
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace carenav::navigation {
+
+/** Frames: the local cost map, the obstacle memory and the robot's pose are
+ *  in the odometry frame (smooth, drifts); the route and the goal are in
+ *  the map frame and are brought into the odometry frame with the latest
+ *  localisation (setMapPose). Without localisation the two frames are the
+ *  same (a walker needs no map). */
+class Navigator {
+ public:
+  Navigator(const NavigationParams& p, const RobotParams& robot);
+
+  /** Odometry: the robot's pose in the odometry frame and its measured velocity. */
+  void setOdometry(const TPose2D& odom_pose, const Twist& measured, double t);
+  /** Where localisation puts the robot in the map frame, now. */
+  void setMapPose(const TPose2D& map_pose);
+  /** The user's command (walker). */
+  void setUserIntent(const Twist& user, double t);
+  /** Adds a sensor observation taken at time t when the robot was at
+   *  `odom_pose`: 2D range scans (CObservation2DRangeScan) and range
+   *  arrays (CObservationRange) become obstacles with ray clearing; other
+   *  kinds are ignored (returns false). */
+  bool addObservation(const mrpt::obs::CObservation& obs, const TPose2D& odom_pose, double t);
+  /** Obstacle points in the odometry frame seen at time t (e.g. from the
+   *  perception module's local grid); counts as fresh sensor data. */
+  void addObstaclePoints(const std::vector<TPoint2D>& points, double t);
+  /** The obstacles of a perception grid (odometry frame) seen at time t,
+   *  replacing the previous set: the grid keeps its own memory (log-odds
+   *  fusion), so these are not aged by the obstacle memory. Counts as fresh
+   *  sensor data. */
+  void setPerceivedObstacles(std::vector<TPoint2D> points, double t);
+
+  /** Goal navigation: a route (map frame) ending at the goal. */
+  void setRoute(const std::vector<TPoint2D>& waypoints, const TPose2D& goal);
+  void clearRoute();
+  bool hasRoute() const { return !route_.empty(); }
+
+  /** One control cycle at time `now`. */
+  struct Cycle {
+    PlannerOutput plan;
+    SafetyDecision decision;
+    double clearance = 0;       ///< m, footprint clearance now (capped at 2 m)
+    bool goal_reached = false;  ///< within the goal tolerances and stopped by the planner
+    size_t obstacles = 0;       ///< remembered obstacle cells
+  };
+  Cycle cycle(double now);
+
+  const LocalCostmap& costmap() const { return map_; }
+  const LocalPlanner& planner() const { return *planner_; }
+  const ObstacleMemory& memory() const { return memory_; }
+  const std::vector<TPoint2D>& perceived() const { return perceived_; }
+  TPose2D odomPose() const { return odom_; }
+  /** Pose of the robot in the map frame (odometry pose corrected by the latest localisation). */
+  TPose2D mapPose() const;
+  /** The remembered obstacles in the map frame (for replanning the route around them). */
+  std::vector<TPoint2D> obstaclesInMap() const;
+
+ private:
+  TPoint2D mapToOdom(const TPoint2D& p) const;
+  TPose2D mapToOdom(const TPose2D& p) const;
+
+  NavigationParams p_;
+  RobotParams robot_;
+  std::unique_ptr<LocalPlanner> planner_;
+  SafetySupervisor supervisor_;
+  Footprint footprint_;
+  LocalCostmap map_;
+  ObstacleMemory memory_;
+  TPose2D odom_;
+  Twist measured_;
+  std::optional<double> odom_t_, scan_t_, intent_t_;
+  std::optional<Twist> user_;
+  // map -> odometry: odom = T (*) map, from the latest setMapPose
+  TPose2D map_to_odom_{0, 0, 0};
+  std::vector<TPoint2D> perceived_;
+  std::vector<TPoint2D> route_;
+  std::optional<TPose2D> goal_;
+};
+
+}  // namespace carenav::navigation

@@ -1,0 +1,66 @@
+// The safety supervisor around every local planner: the rules that stop or
+// slow the robot whatever the planner says. Each rule is a tested invariant
+// (tests/unit/navigation/test_safety.cpp).
+#pragma once
+
+#include <carenav/common/robot.h>
+#include <carenav/navigation/local_planner.h>
+
+#include <optional>
+#include <string>
+
+namespace carenav::navigation {
+
+struct SafetyInput {
+  double now = 0;                        ///< s
+  std::optional<double> last_scan_time;  ///< s, newest obstacle data (none yet: stale)
+  std::optional<double> last_odom_time;  ///< s, newest odometry (none yet: stale)
+  bool needs_intent = false;             ///< walker: the user's command drives
+  std::optional<double> last_intent_time;
+  std::optional<Twist> user;
+  PlannerOutput plan;
+  TPose2D pose;
+  const LocalCostmap* map = nullptr;
+};
+
+/** What the supervisor did. */
+enum class SafetyAction {
+  Pass,  ///< the planner's command, unchanged
+  Slow,  ///< scaled down (same curvature) so the robot can brake in time
+  Stop,  ///< (0, 0)
+};
+const char* safetyActionName(SafetyAction a);
+
+struct SafetyDecision {
+  Twist cmd;
+  SafetyAction action = SafetyAction::Stop;
+  std::string reason;  ///< for Slow and Stop
+};
+
+/** Rules, in order:
+ *  1. stop when there is no scan newer than sensor_timeout;
+ *  2. stop when there is no odometry newer than odom_timeout;
+ *  3. walker: stop when the user's command is older than intent_timeout or
+ *     below intent_deadband (the user let go);
+ *  4. stop when the planner found no admissible trajectory;
+ *  5. scale (v, w) down, keeping the curvature, so that braking at the
+ *     robot's limits along the arc ends safe_distance before the first
+ *     obstacle on it (canBrake holds for the output);
+ *     a footprint that already touches an obstacle gets (0, 0);
+ *  6. never exceed the robot's velocity limits. */
+class SafetySupervisor {
+ public:
+  SafetySupervisor(const NavigationParams& p, const RobotParams& robot) : p_(p), r_(robot) {}
+  SafetyDecision apply(const SafetyInput& in) const;
+  /** s along the arc of `cmd` from `pose` until the footprint touches an
+   *  obstacle (or leaves the map), looking `horizon` seconds ahead;
+   *  infinity when none. */
+  double timeToCollision(const LocalCostmap& map, const TPose2D& pose, const Twist& cmd,
+                         double horizon) const;
+
+ private:
+  NavigationParams p_;
+  RobotParams r_;
+};
+
+}  // namespace carenav::navigation

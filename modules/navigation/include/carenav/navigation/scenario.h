@@ -1,0 +1,96 @@
+// Navigation scenarios run in the simulator, and their metrics (seed 002
+// sec. 6.1): `carenav navigate --scenario S.yaml` and `--suite DIR`.
+#pragma once
+
+#include <carenav/common/robot.h>
+#include <carenav/navigation/navigation_params.h>
+
+#include <mrpt/math/TPoint2D.h>
+#include <mrpt/math/TPose2D.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace carenav::navigation {
+
+using mrpt::math::TPoint2D;
+using mrpt::math::TPose2D;
+
+/** One timed user command: from time t on (until the next entry) the user
+ *  pushes with v and either a turn rate w or, when `heading` is set, steers
+ *  towards that heading (map frame) like a person walking a direction. */
+struct IntentEntry {
+  double t = 0;
+  double v = 0, w = 0;
+  std::optional<double> heading;  ///< rad
+};
+
+/** A scenario file (docs/navigate.md). */
+struct Scenario {
+  std::string name;     ///< `name:` or the file's stem
+  std::string file;     ///< where it was read from
+  std::string world;    ///< simulator world YAML (absolute or relative to the scenario)
+  std::string profile;  ///< robot profile (may be empty: --profile)
+  std::string plugin;   ///< local planner (may be empty: the profile's)
+  TPose2D start;
+  std::optional<TPose2D> goal;      ///< goal scenario (map frame)
+  std::string goal_name;            ///< "room/place", "room" or "place" of the places file
+  std::string places;               ///< places file for goal_name (default: WORLD.places.yaml)
+  std::vector<IntentEntry> intent;  ///< walker scenario
+  double heading_gain = 1.5;        ///< rad/s per rad of heading error for heading intents
+  double duration = 60;             ///< s, simulated
+  std::optional<std::pair<TPoint2D, double>> reach;  ///< success needs the centre within r
+  std::vector<std::vector<TPoint2D>> forbidden;      ///< the centre must never enter these
+  bool path_exists = true;  ///< goal scenarios: the world has a route to the goal
+  int seed = 1;
+  /** The user's (v, w) at time t for a robot heading `yaw`; nullopt before
+   *  the first entry. Each entry holds until the next; the last to the end. */
+  std::optional<std::pair<double, double>> userAt(double t, double yaw) const;
+};
+
+/** Reads a scenario. Throws InputError "FILE:LINE: what" for an empty,
+ *  truncated or malformed file, unknown keys, bad numbers, neither or both
+ *  of goal and intent. */
+Scenario readScenario(const std::string& path);
+Scenario parseScenario(const std::string& text, const std::string& origin,
+                       const std::string& base_dir);
+
+/** Metrics of one run (seed 002 sec. 6.1). */
+struct RunMetrics {
+  std::string scenario, plugin;
+  bool success = false;
+  std::string outcome;  ///< why it failed, or "goal reached" / "ok"
+  size_t collisions = 0;
+  double min_clearance_m = 0, mean_clearance_m = 0;  ///< truth footprint to obstacles
+  double duration_s = 0, path_length_m = 0, mean_speed_mps = 0;
+  /** Walker: mean |(v, w)_robot - (v, w)_user| over the cycles where the
+   *  user's own command was collision-free (NaN when never). */
+  double intent_fidelity = 0;
+  size_t cycles = 0, stops = 0, slowed = 0;
+  double cycle_ms_mean = 0, cycle_ms_max = 0;  ///< wall time of Navigator::cycle
+  size_t depth_frames = 0;                     ///< depth frames through perception
+  double perception_ms_mean = 0;               ///< wall time per depth frame
+  double final_goal_error_m = 0;               ///< goal scenarios
+  double wall_seconds = 0;
+  bool entered_forbidden = false;
+  std::vector<std::string> outputs;
+  std::string toJson() const;
+};
+
+struct RunOptions {
+  std::string out_dir;            ///< PNG of the run and the navigation log; empty: none
+  std::string plugin;             ///< overrides the scenario's and the profile's
+  std::string profile;            ///< overrides the scenario's
+  std::vector<std::string> sets;  ///< profile overrides
+  double control_rate = 10;       ///< Hz
+  bool progress = false;
+};
+
+/** Runs the scenario in the simulator: the profile's robot and sensors, its
+ *  [navigation] (and [localization] for goal scenarios, which localise on
+ *  the world's map from the simulated lidar and odometry), the chosen
+ *  plugin. Throws InputError for bad files. */
+RunMetrics runScenario(const Scenario& s, const RunOptions& o);
+
+}  // namespace carenav::navigation

@@ -1,0 +1,158 @@
+// goal-dwa: dynamic window towards the next waypoint of the global route
+// (Interbot and HOBBIT, seeds 002 ch. 3 and 004).
+#include <carenav/navigation/local_planner.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace carenav::navigation {
+
+namespace {
+
+double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
+
+/** Distance from p to the polyline (or to its only point). */
+double distanceToPath(const std::vector<TPoint2D>& path, double x, double y) {
+  if (path.empty()) return 0;
+  if (path.size() == 1) return std::hypot(path[0].x - x, path[0].y - y);
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i + 1 < path.size(); ++i) {
+    const auto& a = path[i];
+    const auto& b = path[i + 1];
+    const double vx = b.x - a.x, vy = b.y - a.y, l2 = vx * vx + vy * vy;
+    const double u = l2 > 0 ? std::clamp(((x - a.x) * vx + (y - a.y) * vy) / l2, 0.0, 1.0) : 0;
+    best = std::min(best, std::hypot(a.x + u * vx - x, a.y + u * vy - y));
+  }
+  return best;
+}
+
+/** The point `lookahead` metres along the path after the point nearest to
+ *  (x, y); the last point when the path is shorter. */
+TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead) {
+  size_t seg = 0;
+  double best = std::numeric_limits<double>::infinity(), best_u = 0;
+  for (size_t i = 0; i + 1 < path.size(); ++i) {
+    const auto& a = path[i];
+    const auto& b = path[i + 1];
+    const double vx = b.x - a.x, vy = b.y - a.y, l2 = vx * vx + vy * vy;
+    const double u = l2 > 0 ? std::clamp(((x - a.x) * vx + (y - a.y) * vy) / l2, 0.0, 1.0) : 0;
+    const double d = std::hypot(a.x + u * vx - x, a.y + u * vy - y);
+    if (d < best) best = d, seg = i, best_u = u;
+  }
+  double left = lookahead;
+  TPoint2D p{path[seg].x + best_u * (path[seg + 1].x - path[seg].x),
+             path[seg].y + best_u * (path[seg + 1].y - path[seg].y)};
+  for (size_t i = seg + 1; i < path.size(); ++i) {
+    const double d = std::hypot(path[i].x - p.x, path[i].y - p.y);
+    if (d >= left) {
+      return {p.x + (path[i].x - p.x) * left / d, p.y + (path[i].y - p.y) * left / d};
+    }
+    left -= d;
+    p = path[i];
+  }
+  return path.back();
+}
+
+class GoalDwa final : public LocalPlanner {
+ public:
+  GoalDwa(const NavigationParams& p, const RobotParams& r) : p_(p), r_(r) {}
+  std::string name() const override { return "goal-dwa"; }
+  bool needsUserIntent() const override { return false; }
+
+  PlannerOutput plan(const PlannerInput& in) override {
+    PlannerOutput out;
+    if (!in.map || (in.path.empty() && !in.goal)) {
+      out.note = "no route";
+      return out;
+    }
+    std::vector<TPoint2D> path = in.path;
+    if (path.empty()) path.push_back({in.goal->x, in.goal->y});
+    const TPoint2D last = path.back();
+    const double to_goal = std::hypot(last.x - in.pose.x, last.y - in.pose.y);
+    const Window win = dynamicWindow(in.current, r_, p_);
+    std::vector<Twist> samples;
+    double target_heading;
+    bool turn_only = false;
+    if (in.goal && to_goal < p_.goal_tolerance) {
+      // At the goal: turn to its heading, then stop.
+      target_heading = in.goal->phi;
+      if (std::abs(angleDiff(target_heading, in.pose.phi)) < mrpt::DEG2RAD(p_.goal_tolerance_deg)) {
+        out.ok = true;
+        out.note = "goal reached";
+        return out;
+      }
+      turn_only = true;
+    } else {
+      const TPoint2D t = lookaheadPoint(path, in.pose.x, in.pose.y, p_.lookahead);
+      target_heading = std::atan2(t.y - in.pose.y, t.x - in.pose.x);
+      turn_only =
+          std::abs(angleDiff(target_heading, in.pose.phi)) > mrpt::DEG2RAD(p_.turn_in_place_deg);
+    }
+    // Standing still is not a way to the goal: when nothing else is
+    // admissible the planner says so and the supervisor stops.
+    for (const Twist& s : sampleWindow(win, p_))
+      if ((!turn_only || std::abs(s.v) < 1e-9) && (std::abs(s.v) > 1e-6 || std::abs(s.w) > 1e-6))
+        samples.push_back(s);
+    if (turn_only) {
+      // Slow down first when still moving: v from the window's low end.
+      if (samples.empty())
+        for (const Twist& s : sampleWindow(win, p_))
+          if (std::abs(s.v - (win.v_lo > 0 ? win.v_lo : win.v_hi)) < 1e-9) samples.push_back(s);
+      out.note = "turn in place";
+    }
+    const double cap = p_.clearance_influence;
+    auto evaluate = [&](const std::vector<Twist>& candidates) {
+      double best = std::numeric_limits<double>::infinity();
+      for (const Twist& s : candidates) {
+        Trajectory tr =
+            rollout(*in.map, in.pose, s, p_.sim_time, p_.sim_step, cap, p_.obstacle_distance_cap);
+        ++out.evaluated;
+        if (!tr.leaves_map && canBrake(s, tr.time_to_collision, r_, r_.safe_distance)) {
+          ++out.admissible;
+          const TPose2D e = integrateArc(in.pose, s.v, s.w, std::min(p_.score_time, p_.sim_time));
+          double heading_err;
+          if (in.goal && to_goal < p_.goal_tolerance)
+            heading_err = std::abs(angleDiff(target_heading, e.phi));
+          else {
+            const TPoint2D t = lookaheadPoint(path, e.x, e.y, p_.lookahead);
+            heading_err = std::abs(angleDiff(std::atan2(t.y - e.y, t.x - e.x), e.phi));
+          }
+          const double path_dist = distanceToPath(path, e.x, e.y);
+          const double speed = r_.v_max > 0 ? (r_.v_max - s.v) / r_.v_max : 0;
+          tr.cost = p_.k_heading * heading_err + p_.k_path * path_dist + p_.k_speed * speed +
+                    p_.k_goal_obs / std::max(std::min(tr.contact_time, p_.sim_time), 1e-3);
+          if (tr.cost < best - 1e-12) {
+            best = tr.cost;
+            out.cmd = s;
+            out.ok = true;
+          }
+        }
+        out.trajectories.push_back(tr);
+      }
+    };
+    evaluate(samples);
+    if (!out.ok && !turn_only) {
+      // Nothing moves forward safely: turn on the spot towards the route.
+      std::vector<Twist> turns;
+      for (const Twist& s : sampleWindow(win, p_))
+        if (std::abs(s.v) < 1e-9 && std::abs(s.w) > 1e-6) turns.push_back(s);
+      evaluate(turns);
+      if (out.ok) out.note = "turn in place (blocked ahead)";
+    }
+    if (!out.ok) out.note = "no admissible trajectory";
+    return out;
+  }
+
+ private:
+  NavigationParams p_;
+  RobotParams r_;
+};
+
+}  // namespace
+
+std::unique_ptr<LocalPlanner> makeGoalDwa(const NavigationParams& p, const RobotParams& r) {
+  return std::make_unique<GoalDwa>(p, r);
+}
+
+}  // namespace carenav::navigation

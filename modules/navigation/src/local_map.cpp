@@ -1,0 +1,301 @@
+#include <carenav/common/errors.h>
+#include <carenav/navigation/local_map.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace carenav::navigation {
+
+// ---------------------------------------------------------------- memory
+
+ObstacleMemory::ObstacleMemory(double resolution, double persistence, double radius)
+    : res_(resolution), persistence_(persistence), radius_(radius) {}
+
+int64_t ObstacleMemory::key(double x, double y) const {
+  const auto ix = static_cast<int64_t>(std::floor(x / res_));
+  const auto iy = static_cast<int64_t>(std::floor(y / res_));
+  return (ix << 32) ^ (iy & 0xffffffff);
+}
+
+void ObstacleMemory::add(const WorldScan& s, double t) {
+  // Clear along each ray, from where the sensor sees to one cell before
+  // the end point, then mark the hits.
+  for (size_t i = 0; i < s.ends.size(); ++i) {
+    const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
+    const double len = std::hypot(dx, dy);
+    if (len <= 0) continue;
+    const double stop = (i < s.hit.size() && s.hit[i]) ? len - res_ : len;
+    for (double d = std::max(s.range_min, 0.0); d < stop; d += res_ * 0.5) {
+      auto it = cells_.find(key(s.origin.x + dx * d / len, s.origin.y + dy * d / len));
+      if (it != cells_.end() && it->second < t) cells_.erase(it);
+    }
+  }
+  for (size_t i = 0; i < s.ends.size(); ++i)
+    if (i < s.hit.size() && s.hit[i]) cells_[key(s.ends[i].x, s.ends[i].y)] = t;
+}
+
+void ObstacleMemory::addPoints(const std::vector<TPoint2D>& points, double t) {
+  for (const auto& p : points) cells_[key(p.x, p.y)] = t;
+}
+
+void ObstacleMemory::prune(double now, const TPoint2D& robot) {
+  for (auto it = cells_.begin(); it != cells_.end();) {
+    const double x = (static_cast<double>(it->first >> 32) + 0.5) * res_;
+    const double y =
+        (static_cast<double>(static_cast<int32_t>(it->first & 0xffffffff)) + 0.5) * res_;
+    if (now - it->second > persistence_ || std::hypot(x - robot.x, y - robot.y) > radius_)
+      it = cells_.erase(it);
+    else
+      ++it;
+  }
+}
+
+std::vector<TPoint2D> ObstacleMemory::points() const {
+  std::vector<TPoint2D> out;
+  out.reserve(cells_.size());
+  for (const auto& [k, t] : cells_) {
+    (void)t;
+    out.push_back({(static_cast<double>(k >> 32) + 0.5) * res_,
+                   (static_cast<double>(static_cast<int32_t>(k & 0xffffffff)) + 0.5) * res_});
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- footprint
+
+namespace {
+
+double segmentDistance(const Point2& a, const Point2& b, double x, double y) {
+  const double vx = b.x - a.x, vy = b.y - a.y;
+  const double l2 = vx * vx + vy * vy;
+  double u = l2 > 0 ? ((x - a.x) * vx + (y - a.y) * vy) / l2 : 0;
+  u = std::clamp(u, 0.0, 1.0);
+  return std::hypot(a.x + u * vx - x, a.y + u * vy - y);
+}
+
+}  // namespace
+
+Footprint::Footprint(const std::vector<Point2>& poly, double spacing) : polygon(poly) {
+  if (poly.size() < 3) throw InputError("footprint: needs at least 3 corners");
+  double area = 0;
+  for (size_t i = 0; i < poly.size(); ++i) {
+    const auto& a = poly[i];
+    const auto& b = poly[(i + 1) % poly.size()];
+    area += a.x * b.y - b.x * a.y;
+  }
+  if (std::abs(area) < 1e-6) throw InputError("footprint: the polygon has no area");
+  circumscribed = 0;
+  inscribed = std::numeric_limits<double>::infinity();
+  double xmin = 1e9, xmax = -1e9, ymin = 1e9, ymax = -1e9;
+  for (size_t i = 0; i < poly.size(); ++i) {
+    const auto& a = poly[i];
+    const auto& b = poly[(i + 1) % poly.size()];
+    circumscribed = std::max(circumscribed, std::hypot(a.x, a.y));
+    inscribed = std::min(inscribed, segmentDistance(a, b, 0, 0));
+    xmin = std::min(xmin, a.x), xmax = std::max(xmax, a.x);
+    ymin = std::min(ymin, a.y), ymax = std::max(ymax, a.y);
+    const double len = std::hypot(b.x - a.x, b.y - a.y);
+    const int n = std::max(1, static_cast<int>(std::ceil(len / spacing)));
+    for (int k = 0; k < n; ++k)
+      boundary.push_back({a.x + (b.x - a.x) * k / n, a.y + (b.y - a.y) * k / n});
+  }
+  if (!contains(0, 0)) inscribed = 0;  // origin outside its own footprint
+  for (double x = xmin + spacing / 2; x < xmax; x += spacing)
+    for (double y = ymin + spacing / 2; y < ymax; y += spacing)
+      if (contains(x, y)) interior.push_back({x, y});
+}
+
+bool Footprint::contains(double x, double y) const {
+  bool in = false;  // crossing number
+  for (size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+    const auto& a = polygon[i];
+    const auto& b = polygon[j];
+    if ((a.y > y) != (b.y > y) && x < (b.x - a.x) * (y - a.y) / (b.y - a.y) + a.x) in = !in;
+  }
+  return in;
+}
+
+// ---------------------------------------------------------------- distance transform
+
+namespace {
+
+/** 1D squared distance transform of f (lower envelope of parabolas rooted
+ *  at the finite samples); all infinite when no sample is finite. */
+void dt1d(const float* f, int n, int stride, float* out, std::vector<int>& v,
+          std::vector<float>& z) {
+  const float inf = std::numeric_limits<float>::infinity();
+  int k = -1;
+  for (int q = 0; q < n; ++q) {
+    const float fq = f[q * stride];
+    if (fq == inf) continue;
+    if (k < 0) {
+      k = 0;
+      v[0] = q;
+      z[0] = -inf;
+      z[1] = inf;
+      continue;
+    }
+    float s;
+    while (true) {
+      const int r = v[k];
+      s = ((fq + float(q) * float(q)) - (f[r * stride] + float(r) * float(r))) /
+          (2.0f * float(q - r));
+      if (s <= z[k]) {
+        --k;  // z[0] is -inf, so k stays >= 0
+        continue;
+      }
+      break;
+    }
+    ++k;
+    v[k] = q;
+    z[k] = s;
+    z[k + 1] = inf;
+  }
+  if (k < 0) {
+    for (int q = 0; q < n; ++q) out[q * stride] = inf;
+    return;
+  }
+  k = 0;
+  for (int q = 0; q < n; ++q) {
+    while (z[k + 1] < float(q)) ++k;
+    const float d = float(q - v[k]);
+    out[q * stride] = d * d + f[v[k] * stride];
+  }
+}
+
+}  // namespace
+
+std::vector<float> squaredDistanceTransform(const std::vector<uint8_t>& free, int nx, int ny) {
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> f(free.size()), g(free.size());
+  for (size_t i = 0; i < free.size(); ++i) f[i] = free[i] ? inf : 0.0f;
+  const int n = std::max(nx, ny);
+  std::vector<int> v(n + 1);
+  std::vector<float> z(n + 2);
+  for (int x = 0; x < nx; ++x) dt1d(&f[x], ny, nx, &g[x], v, z);           // columns
+  for (int y = 0; y < ny; ++y) dt1d(&g[y * nx], nx, 1, &f[y * nx], v, z);  // rows
+  return f;
+}
+
+// ---------------------------------------------------------------- cost map
+
+LocalCostmap::LocalCostmap(const NavigationParams& p, const Footprint& footprint)
+    : res_(p.resolution),
+      decay_(p.cost_decay),
+      contact_(std::max(p.resolution * 0.5, p.footprint_padding + p.resolution * 0.5)),
+      fp_(footprint) {
+  n_ = std::max(8, static_cast<int>(std::ceil(p.local_size / res_)));
+  far_ = n_ * res_ * 2;
+  dist_.assign(static_cast<size_t>(n_) * n_, static_cast<float>(far_));
+}
+
+int LocalCostmap::cellX(double x) const { return static_cast<int>(std::floor((x - x0_) / res_)); }
+int LocalCostmap::cellY(double y) const { return static_cast<int>(std::floor((y - y0_) / res_)); }
+
+void LocalCostmap::build(const TPoint2D& c, const std::vector<TPoint2D>& obstacles,
+                         const mrpt::maps::COccupancyGridMap2D* static_map,
+                         double static_occupied) {
+  // Snap the origin to the cell grid so that cells do not shift between builds.
+  x0_ = std::floor(c.x / res_) * res_ - (n_ / 2) * res_;
+  y0_ = std::floor(c.y / res_) * res_ - (n_ / 2) * res_;
+  std::vector<uint8_t> free(static_cast<size_t>(n_) * n_, 1);
+  obstacle_cells_ = 0;
+  auto mark = [&](int ix, int iy) {
+    if (ix < 0 || iy < 0 || ix >= n_ || iy >= n_) return;
+    uint8_t& f = free[static_cast<size_t>(iy) * n_ + ix];
+    if (f) ++obstacle_cells_;
+    f = 0;
+  };
+  for (const auto& o : obstacles) mark(cellX(o.x), cellY(o.y));
+  if (static_map) {
+    for (int iy = 0; iy < n_; ++iy)
+      for (int ix = 0; ix < n_; ++ix) {
+        const double x = x0_ + (ix + 0.5) * res_, y = y0_ + (iy + 0.5) * res_;
+        if (x < static_map->getXMin() || x >= static_map->getXMax() || y < static_map->getYMin() ||
+            y >= static_map->getYMax())
+          continue;
+        if (1.0 - static_map->getPos(x, y) > static_occupied) mark(ix, iy);
+      }
+  }
+  const auto d2 = squaredDistanceTransform(free, n_, n_);
+  dist_.resize(d2.size());
+  for (size_t i = 0; i < d2.size(); ++i)
+    dist_[i] =
+        std::isinf(d2[i]) ? static_cast<float>(far_) : static_cast<float>(std::sqrt(d2[i]) * res_);
+}
+
+bool LocalCostmap::inside(double x, double y) const {
+  const int ix = cellX(x), iy = cellY(y);
+  return ix >= 0 && iy >= 0 && ix < n_ && iy < n_;
+}
+
+double LocalCostmap::distance(double x, double y) const {
+  const int ix = cellX(x), iy = cellY(y);
+  if (ix < 0 || iy < 0 || ix >= n_ || iy >= n_) return -1;
+  return dist_[static_cast<size_t>(iy) * n_ + ix];
+}
+
+int LocalCostmap::cellCost(double x, double y) const {
+  const double d = distance(x, y);
+  if (d < 0) return 100;
+  if (d <= 0) return 100;
+  if (d >= decay_) return 0;
+  return static_cast<int>(std::lround(99.0 * (1.0 - d / decay_)));
+}
+
+FootprintCheck LocalCostmap::check(const TPose2D& pose) const {
+  return check(pose, std::numeric_limits<double>::infinity());
+}
+
+FootprintCheck LocalCostmap::check(const TPose2D& pose, double cap) const {
+  FootprintCheck r;
+  const double dc = distance(pose.x, pose.y);
+  if (dc < 0) {
+    r.outside = true;
+    return r;
+  }
+  // Every point of the footprint is within `circumscribed` of the origin:
+  // far from everything, a bound is enough.
+  const double bound = dc - fp_.circumscribed - res_ - contact_;
+  if (bound >= cap) {
+    r.clearance = cap;
+    // Still make sure the footprint lies on the grid.
+    if (!inside(pose.x + fp_.circumscribed, pose.y + fp_.circumscribed) ||
+        !inside(pose.x - fp_.circumscribed, pose.y - fp_.circumscribed))
+      r.outside = true;
+    return r;
+  }
+  const double c = std::cos(pose.phi), s = std::sin(pose.phi);
+  double clearance = std::numeric_limits<double>::infinity();
+  for (const auto& b : fp_.boundary) {
+    const double d = distance(pose.x + c * b.x - s * b.y, pose.y + s * b.x + c * b.y);
+    if (d < 0) {
+      r.outside = true;
+      return r;
+    }
+    // A cell centre closer than half a cell (plus the padding) counts as
+    // touching the outline.
+    if (d < contact_) {
+      r.collision = true;
+      r.clearance = 0;
+      return r;
+    }
+    clearance = std::min(clearance, d - res_ * 0.5);
+  }
+  // An obstacle wholly inside the footprint is far from the outline: look
+  // inside when the origin is close enough to anything for that to happen.
+  if (dc < fp_.circumscribed + res_) {
+    for (const auto& q : fp_.interior) {
+      if (distance(pose.x + c * q.x - s * q.y, pose.y + s * q.x + c * q.y) < res_ * 0.75) {
+        r.collision = true;
+        r.clearance = 0;
+        return r;
+      }
+    }
+  }
+  r.clearance = std::min(clearance, cap);
+  return r;
+}
+
+}  // namespace carenav::navigation

@@ -1,0 +1,163 @@
+#include <carenav/common/errors.h>
+#include <carenav/navigation/local_planner.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace carenav::navigation {
+
+TPose2D integrateArc(const TPose2D& p, double v, double w, double t) {
+  if (std::abs(w) < 1e-9)
+    return {p.x + v * t * std::cos(p.phi), p.y + v * t * std::sin(p.phi), p.phi};
+  const double phi = p.phi + w * t;
+  const double r = v / w;
+  return {p.x + r * (std::sin(phi) - std::sin(p.phi)), p.y - r * (std::cos(phi) - std::cos(p.phi)),
+          std::atan2(std::sin(phi), std::cos(phi))};
+}
+
+Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& cmd, double horizon,
+                   double step, double clearance_cap, double check_distance) {
+  Trajectory tr;
+  tr.cmd = cmd;
+  tr.time_to_collision = horizon;
+  tr.free_distance = std::numeric_limits<double>::infinity();
+  tr.contact_time = std::numeric_limits<double>::infinity();
+  tr.clearance = clearance_cap;
+  tr.end = start;
+  const bool still = cmd.v == 0 && cmd.w == 0;
+  const int steps = still ? 0 : std::max(1, static_cast<int>(std::ceil(horizon / step - 1e-9)));
+  // Beyond the horizon, collisions only, up to check_distance of path (at
+  // most 60 s of it).
+  int check_steps = steps;
+  if (!still && std::abs(cmd.v) * horizon < check_distance)
+    check_steps =
+        static_cast<int>(std::ceil(std::min(60.0, check_distance / std::abs(cmd.v)) / step - 1e-9));
+  const double sweep = std::abs(cmd.v) + std::abs(cmd.w) * map.footprint().circumscribed;
+  for (int k = 0; k <= check_steps; ++k) {
+    const double t = k <= steps ? std::min(horizon, k * step) : k * step;
+    const TPose2D p = k == 0 ? start : integrateArc(start, cmd.v, cmd.w, t);
+    const FootprintCheck c = map.check(p, clearance_cap);
+    if (c.outside) {
+      if (k <= steps) tr.leaves_map = true;
+      break;
+    }
+    if (c.collision) {
+      // The contact lies between the previous sample and this one.
+      const double ttc = std::max(0.0, (k - 1) * step);
+      tr.free_distance = ttc * sweep;
+      tr.contact_time = ttc;
+      if (k <= steps) {
+        tr.collides = true;
+        tr.clearance = 0;
+        tr.time_to_collision = ttc;
+      }
+      break;
+    }
+    if (k > steps) continue;
+    tr.clearance = std::min(tr.clearance, c.clearance);
+    tr.occupancy += map.cellCost(p.x, p.y);
+    tr.end = p;
+  }
+  return tr;
+}
+
+bool canBrake(const Twist& cmd, double time_to_collision, const RobotParams& robot, double margin) {
+  const double av = std::abs(cmd.v), aw = std::abs(cmd.w);
+  if (time_to_collision <= 0) return false;  // already in contact
+  if (av == 0 && aw == 0) return true;
+  // Braking both at the same relative rate keeps the arc; the robot stops
+  // after stop_time seconds, having covered the arc of stop_time / 2 seconds
+  // at the command (v^2 / 2a for the translation, Eq. 4.1).
+  const double stop_time = std::max(av / robot.acc_v, aw / robot.acc_w);
+  const double available = time_to_collision - (av > 0 ? margin / av : 0.0);
+  return stop_time / 2 <= available;
+}
+
+Window dynamicWindow(const Twist& cur, const RobotParams& r, const NavigationParams& p) {
+  Window w;
+  const double dv = r.acc_v * p.window_time, dw = r.acc_w * p.window_time;
+  w.v_lo = std::max(r.v_min, cur.v - dv);
+  w.v_hi = std::min(r.v_max, cur.v + dv);
+  if (w.v_lo > w.v_hi) w.v_lo = w.v_hi = std::clamp(cur.v, r.v_min, r.v_max);
+  w.w_lo = std::max(-r.w_max, cur.w - dw);
+  w.w_hi = std::min(r.w_max, cur.w + dw);
+  if (w.w_lo > w.w_hi) w.w_lo = w.w_hi = std::clamp(cur.w, -r.w_max, r.w_max);
+  return w;
+}
+
+namespace {
+
+void linspace(double lo, double hi, int n, std::vector<double>& out) {
+  if (n <= 1 || hi - lo < 1e-9) {
+    out.push_back(hi);
+    return;
+  }
+  for (int i = 0; i < n; ++i) out.push_back(lo + (hi - lo) * i / (n - 1));
+}
+
+}  // namespace
+
+std::vector<Twist> sampleWindow(const Window& win, const NavigationParams& p,
+                                const std::vector<Twist>& extra) {
+  std::vector<double> vs, ws;
+  if (win.v_hi > 0) linspace(std::max(win.v_lo, 0.0), win.v_hi, p.v_samples, vs);
+  if (win.v_lo < 0) linspace(win.v_lo, std::min(win.v_hi, 0.0), p.v_samples, vs);
+  vs.push_back(win.v_lo);
+  vs.push_back(win.v_hi);
+  if (win.v_lo <= 0 && win.v_hi >= 0) vs.push_back(0);
+  linspace(win.w_lo, win.w_hi, p.w_samples, ws);
+  if (win.w_lo <= 0 && win.w_hi >= 0) ws.push_back(0);
+  auto dedupe = [](std::vector<double>& a) {
+    std::sort(a.begin(), a.end());
+    a.erase(
+        std::unique(a.begin(), a.end(), [](double x, double y) { return std::abs(x - y) < 1e-6; }),
+        a.end());
+  };
+  dedupe(vs);
+  dedupe(ws);
+  std::vector<Twist> out;
+  out.reserve(vs.size() * ws.size() + extra.size());
+  for (double v : vs)
+    for (double w : ws) out.push_back({v, w});
+  for (const auto& e : extra)
+    out.push_back({std::clamp(e.v, win.v_lo, win.v_hi), std::clamp(e.w, win.w_lo, win.w_hi)});
+  return out;
+}
+
+PlannerRegistry::PlannerRegistry() {
+  add("user-intent-dwa",
+      "walker shared control (seed 000 Alg. 4, Eq. 4.10): the user's (v, w) unless unsafe",
+      makeUserIntentDwa);
+  add("goal-dwa", "dynamic window towards the next waypoint of the global route", makeGoalDwa);
+}
+
+PlannerRegistry& PlannerRegistry::instance() {
+  static PlannerRegistry r;
+  return r;
+}
+
+void PlannerRegistry::add(const std::string& name, const std::string& description,
+                          PlannerFactory f) {
+  entries_[name] = {description, std::move(f)};
+}
+
+std::unique_ptr<LocalPlanner> PlannerRegistry::create(const std::string& name,
+                                                      const NavigationParams& p,
+                                                      const RobotParams& robot) const {
+  const auto it = entries_.find(name);
+  if (it == entries_.end()) {
+    std::string known;
+    for (const auto& [n, e] : entries_) known += (known.empty() ? "" : ", ") + n;
+    throw InputError("unknown local planner '" + name + "' (known: " + known + ")");
+  }
+  return it->second.second(p, robot);
+}
+
+std::vector<std::pair<std::string, std::string>> PlannerRegistry::list() const {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto& [n, e] : entries_) out.emplace_back(n, e.first);
+  return out;
+}
+
+}  // namespace carenav::navigation

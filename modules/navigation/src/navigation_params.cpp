@@ -1,0 +1,77 @@
+#include <carenav/common/profile.h>
+#include <carenav/navigation/navigation_params.h>
+
+namespace carenav::navigation {
+
+const ParamTable<NavigationParams>& NavigationParams::table() {
+  using P = NavigationParams;
+  static const auto t =
+      ParamTable<P>()
+          .choice("plugin", &P::plugin, {"user-intent-dwa", "goal-dwa"},
+                  "local method: user-intent-dwa (walker shared control) or goal-dwa")
+          .real("sim_time", &P::sim_time, "s", 0.1, 30,
+                "horizon of each sampled trajectory (seed 000 Table 5.1: 7.0)")
+          .real("sim_step", &P::sim_step, "s", 0.01, 1, "rollout step (seed 000: 0.1)")
+          .real("window_time", &P::window_time, "s", 0.01, 5,
+                "dynamic window: velocities reachable in this time (seed 000 time constant 0.5)")
+          .integer("v_samples", &P::v_samples, "", 2, 100,
+                   "samples of v per direction (seed 000: 12 forward, 12 backward)")
+          .integer("w_samples", &P::w_samples, "", 2, 100, "samples of w across the window")
+          .real("k_s", &P::k_s, "", 0, 100, "user-intent DWA: weight of the summed cell cost")
+          .real("k_0", &P::k_0, "m", 0, 100,
+                "user-intent DWA: weight of 1 / dist(v, w), the free distance along the arc")
+          .real("k_1", &P::k_1, "", 0, 100,
+                "user-intent DWA: penalty for driving against the user's direction")
+          .real("k_2", &P::k_2, "", 0, 100, "user-intent DWA: weight of the end-pose distance")
+          .real("clearance_influence", &P::clearance_influence, "m", 0.01, 10,
+                "lateral clearance beyond this is not told apart")
+          .real("obstacle_distance_cap", &P::obstacle_distance_cap, "m", 0.1, 100,
+                "arcs are checked at least this far, even slow ones; farther obstacles "
+                "do not count (user-intent DWA)")
+          .real("k_heading", &P::k_heading, "1/rad", 0, 100, "goal DWA: heading error weight")
+          .real("k_path", &P::k_path, "1/m", 0, 100, "goal DWA: distance-to-route weight")
+          .real("k_speed", &P::k_speed, "", 0, 100, "goal DWA: slowness weight")
+          .real("k_goal_obs", &P::k_goal_obs, "s", 0, 100,
+                "goal DWA: weight of 1 / the time to the nearest obstacle on the arc")
+          .real("turn_in_place_deg", &P::turn_in_place_deg, "deg", 0, 180,
+                "goal DWA: turn on the spot when the waypoint is further off")
+          .real("score_time", &P::score_time, "s", 0.1, 30,
+                "goal DWA: critics are taken at the pose reached after this time")
+          .real("lookahead", &P::lookahead, "m", 0.1, 10,
+                "goal DWA: the waypoint is this far along the route")
+          .real("local_size", &P::local_size, "m", 1, 50, "side of the robot-centred local grid")
+          .real("resolution", &P::resolution, "m", 0.01, 0.5, "cell size of the local grid")
+          .real("obstacle_persistence", &P::obstacle_persistence, "s", 0, 600,
+                "seen obstacles are remembered this long (seed 004: about 5)")
+          .real("memory_radius", &P::memory_radius, "m", 0.5, 50,
+                "remembered obstacles farther from the robot are dropped")
+          .real("cost_decay", &P::cost_decay, "m", 0.01, 5,
+                "cell cost falls from 100 to 0 over this distance to an obstacle")
+          .real("footprint_padding", &P::footprint_padding, "m", 0, 1,
+                "closer than this to an obstacle counts as contact (sensing and control error)")
+          .real("plan_clearance", &P::plan_clearance, "m", 0, 5,
+                "global route: extra clearance beyond the robot's inscribed radius")
+          .real("plan_cost_weight", &P::plan_cost_weight, "", 0, 100,
+                "global route: extra cost near obstacles (keeps routes central)")
+          .real("goal_tolerance", &P::goal_tolerance, "m", 0.01, 10,
+                "goal reached within this distance (seed 002: 0.5)")
+          .real("goal_tolerance_deg", &P::goal_tolerance_deg, "deg", 0.1, 180,
+                "heading tolerance at the goal (seed 002: 0.05 rad)")
+          .real("sensor_timeout", &P::sensor_timeout, "s", 0.01, 10,
+                "safety: stop when the newest scan is older")
+          .real("odom_timeout", &P::odom_timeout, "s", 0.01, 10,
+                "safety: stop when the newest odometry is older")
+          .real("intent_timeout", &P::intent_timeout, "s", 0.01, 10,
+                "safety (walker): stop when the user's command is older")
+          .real("intent_deadband", &P::intent_deadband, "", 0, 1,
+                "safety (walker): user commands below this (m/s, rad/s) mean stop");
+  return t;
+}
+
+void registerProfileSections() {
+  ProfileSchemas::instance().add(SectionSchema::of(
+      NavigationParams::table(), "navigation",
+      "local planners (dynamic window plugins), obstacle memory, global route, safety"));
+}
+
+}  // namespace carenav::navigation

@@ -1,0 +1,170 @@
+#include <carenav/navigation/navigator.h>
+
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservationRange.h>
+#include <mrpt/poses/CPoint2D.h>
+#include <mrpt/poses/CPose2D.h>
+
+#include <cmath>
+
+namespace carenav::navigation {
+
+using mrpt::poses::CPose2D;
+
+Navigator::Navigator(const NavigationParams& p, const RobotParams& robot)
+    : p_(p),
+      robot_(robot),
+      planner_(PlannerRegistry::instance().create(p.plugin, p, robot)),
+      supervisor_(p, robot),
+      footprint_(robot.footprint, p.resolution),
+      map_(p, footprint_),
+      memory_(p.resolution, p.obstacle_persistence, p.memory_radius) {}
+
+void Navigator::setOdometry(const TPose2D& pose, const Twist& measured, double t) {
+  odom_ = pose;
+  measured_ = measured;
+  odom_t_ = t;
+}
+
+void Navigator::setMapPose(const TPose2D& m) {
+  // odom = T (+) map for points: T = odom (+) inverse(map pose).
+  const CPose2D t = CPose2D(odom_) + (CPose2D() - CPose2D(m));
+  map_to_odom_ = {t.x(), t.y(), t.phi()};
+}
+
+TPose2D Navigator::mapPose() const {
+  const CPose2D m = (CPose2D() - CPose2D(map_to_odom_)) + CPose2D(odom_);
+  return {m.x(), m.y(), m.phi()};
+}
+
+std::vector<TPoint2D> Navigator::obstaclesInMap() const {
+  const CPose2D inv = CPose2D() - CPose2D(map_to_odom_);
+  std::vector<TPoint2D> out;
+  std::vector<TPoint2D> all = memory_.points();
+  all.insert(all.end(), perceived_.begin(), perceived_.end());
+  for (const auto& p : all) {
+    const auto q = inv + mrpt::poses::CPoint2D(p.x, p.y);
+    out.push_back({q.x(), q.y()});
+  }
+  return out;
+}
+
+TPoint2D Navigator::mapToOdom(const TPoint2D& p) const {
+  const double c = std::cos(map_to_odom_.phi), s = std::sin(map_to_odom_.phi);
+  return {map_to_odom_.x + c * p.x - s * p.y, map_to_odom_.y + s * p.x + c * p.y};
+}
+
+TPose2D Navigator::mapToOdom(const TPose2D& p) const {
+  const TPoint2D q = mapToOdom(TPoint2D{p.x, p.y});
+  return {q.x, q.y,
+          std::atan2(std::sin(p.phi + map_to_odom_.phi), std::cos(p.phi + map_to_odom_.phi))};
+}
+
+void Navigator::setUserIntent(const Twist& u, double t) {
+  user_ = u;
+  intent_t_ = t;
+}
+
+bool Navigator::addObservation(const mrpt::obs::CObservation& obs, const TPose2D& at, double t) {
+  const CPose2D robot(at);
+  if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs)) {
+    const CPose2D sensor = robot + CPose2D(scan->sensorPose);
+    WorldScan ws;
+    ws.origin = {sensor.x(), sensor.y()};
+    const size_t n = scan->getScanSize();
+    const double max_range = scan->maxRange;
+    for (size_t i = 0; i < n; ++i) {
+      if (!scan->getScanRangeValidity(i)) continue;  // no return: neither hit nor clear
+      const double r = scan->getScanRange(i);
+      const double a = scan->getScanAngle(i);
+      const CPose2D end = sensor + CPose2D(r * std::cos(a), r * std::sin(a), 0);
+      ws.ends.push_back({end.x(), end.y()});
+      ws.hit.push_back(r < max_range - 1e-3 ? 1 : 0);
+    }
+    memory_.add(ws, t);
+    scan_t_ = t;
+    return true;
+  }
+  if (const auto* ra = dynamic_cast<const mrpt::obs::CObservationRange*>(&obs)) {
+    // A range array (Leddar): each segment is a cone; its return may come
+    // from anywhere across the cone, so the hit is spread over the arc.
+    for (const auto& m : ra->sensedData) {
+      const CPose2D sensor = robot + CPose2D(mrpt::poses::CPose3D(m.sensorPose));
+      WorldScan ws;
+      ws.origin = {sensor.x(), sensor.y()};
+      const double r = m.sensedDistance;
+      if (!(r > 0) || !std::isfinite(r)) continue;
+      const bool hit = r < ra->maxSensorDistance - 1e-3;
+      const double ap = ra->sensorConeApperture;
+      const int n = std::max(1, static_cast<int>(std::ceil(r * ap / p_.resolution)));
+      for (int k = 0; k <= n; ++k) {
+        const double a = -ap / 2 + ap * k / n;
+        const CPose2D end = sensor + CPose2D(r * std::cos(a), r * std::sin(a), 0);
+        ws.ends.push_back({end.x(), end.y()});
+        ws.hit.push_back(hit ? 1 : 0);
+      }
+      memory_.add(ws, t);
+    }
+    scan_t_ = t;
+    return true;
+  }
+  return false;
+}
+
+void Navigator::addObstaclePoints(const std::vector<TPoint2D>& points, double t) {
+  memory_.addPoints(points, t);
+  scan_t_ = t;
+}
+
+void Navigator::setPerceivedObstacles(std::vector<TPoint2D> points, double t) {
+  perceived_ = std::move(points);
+  scan_t_ = t;
+}
+
+void Navigator::setRoute(const std::vector<TPoint2D>& waypoints, const TPose2D& goal) {
+  route_ = waypoints;
+  goal_ = goal;
+}
+
+void Navigator::clearRoute() {
+  route_.clear();
+  goal_.reset();
+}
+
+Navigator::Cycle Navigator::cycle(double now) {
+  Cycle c;
+  memory_.prune(now, {odom_.x, odom_.y});
+  std::vector<TPoint2D> obstacles = memory_.points();
+  obstacles.insert(obstacles.end(), perceived_.begin(), perceived_.end());
+  map_.build({odom_.x, odom_.y}, obstacles);
+  c.obstacles = memory_.size();
+  c.clearance = map_.check(odom_, 2.0).clearance;
+
+  PlannerInput in;
+  in.t = now;
+  in.pose = odom_;
+  in.current = measured_;
+  in.map = &map_;
+  if (planner_->needsUserIntent()) in.user = user_;
+  if (goal_) {
+    for (const auto& w : route_) in.path.push_back(mapToOdom(w));
+    in.goal = mapToOdom(*goal_);
+  }
+  c.plan = planner_->plan(in);
+  c.goal_reached = goal_ && c.plan.ok && c.plan.note == "goal reached";
+
+  SafetyInput s;
+  s.now = now;
+  s.last_scan_time = scan_t_;
+  s.last_odom_time = odom_t_;
+  s.needs_intent = planner_->needsUserIntent();
+  s.last_intent_time = intent_t_;
+  s.user = user_;
+  s.plan = c.plan;
+  s.pose = odom_;
+  s.map = &map_;
+  c.decision = supervisor_.apply(s);
+  return c;
+}
+
+}  // namespace carenav::navigation

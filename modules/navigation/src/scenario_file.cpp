@@ -1,0 +1,180 @@
+// Reading scenario files (docs/navigate.md).
+#include <carenav/common/errors.h>
+#include <carenav/common/yaml.h>
+#include <carenav/navigation/scenario.h>
+
+#include <mrpt/core/bits_math.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace carenav::navigation {
+
+namespace fs = std::filesystem;
+using yaml::Node;
+
+std::optional<std::pair<double, double>> Scenario::userAt(double t, double yaw) const {
+  const IntentEntry* e = nullptr;
+  for (const auto& i : intent)
+    if (i.t <= t + 1e-9) e = &i;
+  if (!e) return std::nullopt;
+  if (!e->heading) return std::make_pair(e->v, e->w);
+  const double err = std::atan2(std::sin(*e->heading - yaw), std::cos(*e->heading - yaw));
+  return std::make_pair(e->v, heading_gain * err);
+}
+
+namespace {
+
+struct Reader {
+  std::string origin;
+  [[noreturn]] void fail(const Node& n, const std::string& what) const {
+    throw InputError(origin + ":" + std::to_string(n.line) + ": " + what);
+  }
+  double number(const Node& n, const std::string& what) const {
+    if (n.kind != Node::Kind::Scalar || n.quoted) fail(n, what + ": expected a number");
+    errno = 0;
+    char* end = nullptr;
+    const double d = std::strtod(n.scalar.c_str(), &end);
+    if (n.scalar.empty() || end != n.scalar.c_str() + n.scalar.size() || errno == ERANGE ||
+        !std::isfinite(d))
+      fail(n, what + ": '" + n.scalar + "' is not a finite number");
+    return d;
+  }
+  std::string text(const Node& n, const std::string& what) const {
+    if (n.kind != Node::Kind::Scalar || n.scalar.empty()) fail(n, what + ": expected text");
+    return n.scalar;
+  }
+  std::vector<double> numbers(const Node& n, const std::string& what, size_t count) const {
+    if (n.kind != Node::Kind::Seq || n.seq.size() != count)
+      fail(n, what + ": expected [" + std::to_string(count) + " numbers]");
+    std::vector<double> out;
+    for (const auto& e : n.seq) out.push_back(number(e, what));
+    return out;
+  }
+  TPose2D pose(const Node& n, const std::string& what) const {
+    const auto v = numbers(n, what + " [x, y, heading_deg]", 3);
+    return {v[0], v[1], mrpt::DEG2RAD(v[2])};
+  }
+};
+
+}  // namespace
+
+Scenario parseScenario(const std::string& text, const std::string& origin,
+                       const std::string& base_dir) {
+  const Reader r{origin};
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw InputError(origin + ": empty scenario file");
+  const Node root = yaml::parse(text, origin);
+  if (root.kind != Node::Kind::Map) r.fail(root, "a scenario is a map of keys");
+  static const std::set<std::string> known = {
+      "format",    "name",        "world",          "profile",      "plugin",   "start",
+      "goal",      "intent",      "intent_heading", "heading_gain", "duration", "reach",
+      "forbidden", "path_exists", "seed",           "places",       "end"};
+  for (size_t i = 0; i < root.map.size(); ++i)
+    if (!known.count(root.map[i].first))
+      throw InputError(origin + ":" + std::to_string(root.key_lines[i]) + ": unknown key '" +
+                       root.map[i].first + "'");
+  const Node* fmt = root.find("format");
+  if (!fmt) throw InputError(origin + ": no 'format: 1' line: not a carenav scenario");
+  if (r.number(*fmt, "format") != 1)
+    r.fail(*fmt, "format " + fmt->scalar + " is not supported (1 is)");
+  // The last line is `end: true`, so a file cut short is noticed.
+  const Node* end = root.find("end");
+  if (!end || end->scalar != "true")
+    throw InputError(origin + ": no final 'end: true': the file is truncated");
+
+  Scenario s;
+  s.file = origin;
+  s.name = fs::path(origin).stem().string();
+  auto resolve = [&](const std::string& p) {
+    return fs::path(p).is_absolute() ? p : (fs::path(base_dir) / p).lexically_normal().string();
+  };
+  if (const Node* n = root.find("name")) s.name = r.text(*n, "name");
+  const Node* world = root.find("world");
+  if (!world) throw InputError(origin + ": 'world:' (a simulator world file) is required");
+  s.world = resolve(r.text(*world, "world"));
+  if (const Node* n = root.find("profile")) s.profile = resolve(r.text(*n, "profile"));
+  if (const Node* n = root.find("plugin")) s.plugin = r.text(*n, "plugin");
+  if (const Node* n = root.find("places")) s.places = resolve(r.text(*n, "places"));
+  const Node* start = root.find("start");
+  if (!start) throw InputError(origin + ": 'start: [x, y, heading_deg]' is required");
+  s.start = r.pose(*start, "start");
+  if (const Node* n = root.find("goal")) {
+    if (n->kind == Node::Kind::Scalar && (n->quoted || !n->scalar.empty()))
+      s.goal_name = r.text(*n, "goal");
+    else
+      s.goal = r.pose(*n, "goal");
+  }
+  auto readIntent = [&](const Node& n, bool heading) {
+    if (n.kind != Node::Kind::Seq || n.seq.empty())
+      r.fail(n, "intent: expected a list of [t, v, w] (intent_heading: [t, v, heading_deg])");
+    double last_t = -1;
+    for (const auto& e : n.seq) {
+      const auto v = r.numbers(e, heading ? "intent_heading entry" : "intent entry", 3);
+      if (v[0] < 0 || v[0] <= last_t) r.fail(e, "intent times must increase from 0");
+      last_t = v[0];
+      IntentEntry ie;
+      ie.t = v[0];
+      ie.v = v[1];
+      if (heading)
+        ie.heading = mrpt::DEG2RAD(v[2]);
+      else
+        ie.w = v[2];
+      s.intent.push_back(ie);
+    }
+  };
+  const Node* intent = root.find("intent");
+  const Node* intent_h = root.find("intent_heading");
+  if (intent && intent_h) r.fail(*intent_h, "give either intent or intent_heading, not both");
+  if (intent) readIntent(*intent, false);
+  if (intent_h) readIntent(*intent_h, true);
+  const bool has_goal = s.goal.has_value() || !s.goal_name.empty();
+  if (has_goal == !s.intent.empty())
+    throw InputError(origin +
+                     ": give exactly one of 'goal' (goal navigation) and "
+                     "'intent'/'intent_heading' (a user pushing a walker)");
+  if (const Node* n = root.find("heading_gain")) s.heading_gain = r.number(*n, "heading_gain");
+  if (const Node* n = root.find("duration")) {
+    s.duration = r.number(*n, "duration");
+    if (s.duration <= 0 || s.duration > 3600) r.fail(*n, "duration must be in (0, 3600] s");
+  }
+  if (const Node* n = root.find("reach")) {
+    const auto v = r.numbers(*n, "reach [x, y, radius]", 3);
+    if (v[2] <= 0) r.fail(*n, "reach: the radius must be positive");
+    s.reach = std::make_pair(TPoint2D{v[0], v[1]}, v[2]);
+  }
+  if (const Node* n = root.find("forbidden")) {
+    if (n->kind != Node::Kind::Seq) r.fail(*n, "forbidden: expected a list of polygons");
+    for (const auto& poly : n->seq) {
+      if (poly.kind != Node::Kind::Seq || poly.seq.size() < 3)
+        r.fail(poly, "forbidden: a polygon is a list of at least 3 [x, y] corners");
+      std::vector<TPoint2D> pts;
+      for (const auto& c : poly.seq) {
+        const auto v = r.numbers(c, "forbidden corner [x, y]", 2);
+        pts.push_back({v[0], v[1]});
+      }
+      s.forbidden.push_back(pts);
+    }
+  }
+  if (const Node* n = root.find("path_exists")) {
+    if (n->scalar != "true" && n->scalar != "false") r.fail(*n, "path_exists: true or false");
+    s.path_exists = n->scalar == "true";
+  }
+  if (const Node* n = root.find("seed")) s.seed = static_cast<int>(r.number(*n, "seed"));
+  return s;
+}
+
+Scenario readScenario(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(path + ": cannot open the scenario file");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return parseScenario(ss.str(), path, fs::path(path).parent_path().string());
+}
+
+}  // namespace carenav::navigation

@@ -1,0 +1,443 @@
+// Running a scenario: the simulator drives the Navigator in closed loop,
+// faster than real time; metrics from the simulator's ground truth.
+#include <carenav/common/errors.h>
+#include <carenav/common/json.h>
+#include <carenav/common/profile.h>
+#include <carenav/io/map_render.h>
+#include <carenav/localization/localizer.h>
+#include <carenav/navigation/global_planner.h>
+#include <carenav/navigation/navigator.h>
+#include <carenav/navigation/scenario.h>
+#include <carenav/perception/pipeline.h>
+#include <carenav/places/places.h>
+#include <carenav/sim/simulator.h>
+
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/poses/CPose2D.h>
+
+#include <unistd.h>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+
+namespace carenav::navigation {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+bool inPolygon(const std::vector<TPoint2D>& poly, double x, double y) {
+  bool in = false;
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
+    if ((poly[i].y > y) != (poly[j].y > y) &&
+        x < (poly[j].x - poly[i].x) * (y - poly[i].y) / (poly[j].y - poly[i].y) + poly[i].x)
+      in = !in;
+  return in;
+}
+
+/** Footprint clearance against the true world: walls, floor height changes
+ *  (steps up or down, holes, stairs), table tops lower than the robot and
+ *  people. */
+class TruthClearance {
+ public:
+  TruthClearance(const sim::World& w, const RobotParams& robot, double step)
+      : w_(w), fp_(robot.footprint, w.resolution()) {
+    const int nx = w.sizeX(), ny = w.sizeY();
+    std::vector<uint8_t> free(static_cast<size_t>(nx) * ny, 1);
+    for (int y = 0; y < ny; ++y)
+      for (int x = 0; x < nx; ++x) {
+        const sim::Cell& c = w.cell(x, y);
+        const bool blocked =
+            c.wall() || std::abs(c.floor) > step || (c.hasSlab() && c.slab_lo < robot.height);
+        if (blocked) free[static_cast<size_t>(y) * nx + x] = 0;
+      }
+    const auto d2 = squaredDistanceTransform(free, nx, ny);
+    dist_.resize(d2.size());
+    for (size_t i = 0; i < d2.size(); ++i)
+      dist_[i] = std::isinf(d2[i]) ? 1e3f : static_cast<float>(std::sqrt(d2[i]) * w.resolution());
+  }
+  double at(const sim::Pose2& p, const std::vector<sim::PersonNow>& people) const {
+    const double c = std::cos(p.yaw), s = std::sin(p.yaw);
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& b : fp_.boundary) {
+      const double x = p.x + c * b.x - s * b.y, y = p.y + s * b.x + c * b.y;
+      const int cx = w_.cellX(x), cy = w_.cellY(y);
+      double d = 0;
+      if (w_.inside(cx, cy)) d = dist_[static_cast<size_t>(cy) * w_.sizeX() + cx];
+      for (const auto& q : people) d = std::min(d, std::hypot(x - q.x, y - q.y) - q.r);
+      best = std::min(best, d);
+    }
+    return std::max(0.0, best - w_.resolution() / 2);
+  }
+
+ private:
+  const sim::World& w_;
+  Footprint fp_;
+  std::vector<float> dist_;
+};
+
+/** The route as the local planner follows it: from where it was planned. */
+std::vector<TPoint2D> withStart(const TPoint2D& start, const std::vector<TPoint2D>& waypoints) {
+  std::vector<TPoint2D> out{start};
+  out.insert(out.end(), waypoints.begin(), waypoints.end());
+  return out;
+}
+
+/** Cells of the perception grid above this occupancy probability are obstacles. */
+constexpr double perception_occupied = 0.6;
+
+std::string fmt(double v, int prec = 3) {
+  char b[48];
+  std::snprintf(b, sizeof b, "%.*f", prec, v);
+  return b;
+}
+
+}  // namespace
+
+RunMetrics runScenario(const Scenario& sc, const RunOptions& o) {
+  // Profile: --profile, else the scenario's.
+  const std::string profile_path = !o.profile.empty() ? o.profile : sc.profile;
+  if (profile_path.empty())
+    throw InputError(sc.file + ": no robot profile: give --profile or 'profile:' in the scenario");
+  Profile prof = Profile::load(profile_path);
+  prof.applyOverrides(o.sets);
+  prof.validate();
+  const auto robot = prof.section<RobotParams>("robot");
+  const auto sensors = loadSensors(prof);
+  auto nav = prof.section<NavigationParams>("navigation");
+  if (!sc.plugin.empty()) nav.plugin = sc.plugin;
+  if (!o.plugin.empty()) nav.plugin = o.plugin;
+  auto simp = prof.section<sim::SimParams>("sim");
+  simp.seed = sc.seed;
+  const auto locp = prof.section<localization::LocalizationParams>("localization");
+
+  auto world = std::make_shared<const sim::World>(sim::loadWorld(sc.world, simp.wall_height));
+  // 2D lidars and range arrays go to the obstacle memory; depth cameras
+  // through the perception pipeline (2.5D grid, RRT-GPD ground plane,
+  // inverse sensor model: stairs down and gutters become obstacles).
+  std::vector<SensorParams> used;
+  for (const auto& s : sensors)
+    if (s.type == "lidar2d" || s.type == "range-array" || s.type == "depth-camera")
+      used.push_back(s);
+  sim::Simulator sim(world, robot, used, simp);
+  const auto perc_params = prof.section<perception::PerceptionParams>("perception");
+  perception::Pipeline perceive(perc_params, perception::Method::RrtGpd);
+  size_t depth_frames = 0;
+  double perceive_ms = 0;
+  sim.reset({sc.start.x, sc.start.y, sc.start.phi});
+  if (sim.footprintBlocked({sc.start.x, sc.start.y, sc.start.phi}, 0))
+    throw InputError(sc.file + ": the start pose puts the robot on an obstacle of the world");
+
+  Navigator navigator(nav, robot);
+  const bool walker = navigator.planner().needsUserIntent();
+  std::optional<TPose2D> goal = sc.goal;
+  std::string goal_label;
+  if (!sc.goal_name.empty()) {
+    // A goal by name: a place, a room's default place or its most central free cell.
+    const std::string pf = sc.places.empty() ? places::placesPathForMap(sc.world) : sc.places;
+    const places::Goal g =
+        places::resolveGoal(places::readPlacesFile(pf), world->grid(), sc.goal_name);
+    goal = TPose2D{g.x, g.y, mrpt::DEG2RAD(g.heading_deg)};
+    goal_label = g.room + (g.place.empty() ? "" : "/" + g.place);
+  }
+  const bool goal_mode = goal.has_value();
+  if (walker && goal_mode)
+    throw InputError(sc.file + ": plugin " + nav.plugin +
+                     " follows a user's command; this scenario has a goal (use goal-dwa)");
+  if (!walker && !goal_mode)
+    throw InputError(sc.file + ": plugin " + nav.plugin +
+                     " drives to a goal; this scenario scripts a user (use user-intent-dwa)");
+
+  RunMetrics m;
+  m.scenario = sc.name;
+  m.plugin = nav.plugin;
+
+  // Goal navigation: route on the world's map, localisation on it from the
+  // first 2D lidar (odometry alone when the robot has none).
+  std::unique_ptr<localization::Localizer> loc;
+  std::string loc_sensor;
+  for (const auto& s : sensors)
+    if (s.type == "lidar2d" && loc_sensor.empty()) loc_sensor = s.label;
+  std::optional<Route> route;
+  const Footprint fp(robot.footprint, nav.resolution);
+  std::unique_ptr<GlobalPlanner> gp;
+  if (goal_mode) {
+    gp = std::make_unique<GlobalPlanner>(world->grid(), fp.inscribed, nav);
+    route = gp->plan({sc.start.x, sc.start.y}, {goal->x, goal->y});
+    if (route) navigator.setRoute(withStart({sc.start.x, sc.start.y}, route->waypoints), *goal);
+    if (!loc_sensor.empty()) {
+      loc = std::make_unique<localization::Localizer>(world->grid(), locp);
+      loc->initPose(mrpt::poses::CPose2D(sc.start.x, sc.start.y, sc.start.phi), 0.1, 0.1,
+                    mrpt::DEG2RAD(3.0));
+    }
+  }
+
+  const TruthClearance truth_clear(*world, robot, simp.bumper_step);
+  const double dt = 1.0 / o.control_rate;
+  std::vector<TPoint2D> truth_path{{sc.start.x, sc.start.y}}, user_path{{sc.start.x, sc.start.y}};
+  TPose2D user_pose = sc.start;  // where the user's commands alone would take a free walker
+  mrpt::poses::CPose2D last_loc_odo;
+  bool loc_started = false;
+  double clear_sum = 0, fid_sum = 0, cycle_ms_sum = 0;
+  size_t fid_n = 0;
+  m.min_clearance_m = std::numeric_limits<double>::infinity();
+  bool reached = false, goal_reached = false;
+  double t_end = sc.duration;
+  std::ofstream log;
+  if (!o.out_dir.empty()) {
+    fs::create_directories(o.out_dir);
+    log.open(fs::path(o.out_dir) / "navlog.csv");
+    log << "t,truth_x,truth_y,truth_yaw,est_x,est_y,est_yaw,user_v,user_w,plan_v,plan_w,cmd_v,"
+           "cmd_w,action,reason,clearance_m,obstacle_cells,planner_note\n";
+  }
+  const auto wall0 = std::chrono::steady_clock::now();
+  const bool tty = o.progress && isatty(fileno(stderr));
+  const auto& odo0 = sim.odometry();
+  navigator.setOdometry({odo0.x, odo0.y, odo0.yaw}, {0, 0}, 0);
+  size_t steps = static_cast<size_t>(std::ceil(sc.duration / dt - 1e-9));
+  for (size_t k = 0; k < steps; ++k) {
+    // Sensors and odometry of the last period.
+    for (const auto& f : sim.step(dt)) {
+      const TPose2D odo{f.odometry.x, f.odometry.y, f.odometry.yaw};
+      navigator.setOdometry(odo, {sim.v(), sim.w()}, f.t);
+      for (const auto& obs : f.observations) {
+        if (dynamic_cast<const mrpt::obs::CObservationOdometry*>(obs.get())) continue;
+        if (auto* depth = dynamic_cast<mrpt::obs::CObservation3DRangeScan*>(obs.get())) {
+          if (!perc_params.sensor.empty() && depth->sensorLabel != perc_params.sensor) continue;
+          const auto cloud = perception::cloudFromObservation(*depth);
+          if (!cloud) continue;
+          perception::FrameInput fi;
+          fi.cloud = &*cloud;
+          fi.sensor_origin = {static_cast<float>(depth->sensorPose.x()),
+                              static_cast<float>(depth->sensorPose.y()),
+                              static_cast<float>(depth->sensorPose.z())};
+          fi.odometry = mrpt::poses::CPose2D(odo.x, odo.y, odo.phi);
+          const auto c0 = std::chrono::steady_clock::now();
+          perceive.process(fi, false);
+          perceive_ms +=
+              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0)
+                  .count();
+          ++depth_frames;
+          // Occupied cells of the local grid are obstacles for navigation.
+          const auto& g = perceive.grid();
+          std::vector<TPoint2D> occ;
+          for (int j = 0; j < g.cells(); ++j)
+            for (int i = 0; i < g.cells(); ++i)
+              if (g.prob(i, j) > perception_occupied) occ.push_back({g.centreX(i), g.centreY(j)});
+          navigator.setPerceivedObstacles(std::move(occ), f.t);
+          continue;
+        }
+        navigator.addObservation(*obs, odo, f.t);
+        if (loc && obs->sensorLabel == loc_sensor) {
+          const mrpt::poses::CPose2D now_odo(odo.x, odo.y, odo.phi);
+          const mrpt::poses::CPose2D inc =
+              loc_started ? now_odo - last_loc_odo : mrpt::poses::CPose2D();
+          last_loc_odo = now_odo;
+          loc_started = true;
+          loc->step(inc, std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs), f.t);
+          const auto p = loc->pose();
+          navigator.setMapPose({p.x(), p.y(), p.phi()});
+        }
+      }
+    }
+    const double t = sim.time();
+    const sim::Pose2 truth = sim.groundTruth();
+    std::optional<Twist> user;
+    if (walker) {
+      if (const auto u = sc.userAt(t, truth.yaw)) {
+        user = Twist{u->first, u->second};
+        navigator.setUserIntent(*user, t);
+        // The user's intended path: their commands on a free floor.
+        const auto ui = sc.userAt(t, user_pose.phi);
+        user_pose = integrateArc(user_pose, ui->first,
+                                 std::clamp(ui->second, -robot.w_max, robot.w_max), dt);
+        user_path.push_back({user_pose.x, user_pose.y});
+      }
+    }
+    const auto c0 = std::chrono::steady_clock::now();
+    const Navigator::Cycle cyc = navigator.cycle(t);
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0).count();
+    cycle_ms_sum += ms;
+    m.cycle_ms_max = std::max(m.cycle_ms_max, ms);
+    ++m.cycles;
+    sim.setCommand(cyc.decision.cmd.v, cyc.decision.cmd.w);
+    m.stops += cyc.decision.action == SafetyAction::Stop;
+    m.slowed += cyc.decision.action == SafetyAction::Slow;
+
+    // Metrics from the truth.
+    const double cl = truth_clear.at(truth, sim::peopleAt(*world, t));
+    m.min_clearance_m = std::min(m.min_clearance_m, cl);
+    clear_sum += cl;
+    truth_path.push_back({truth.x, truth.y});
+    for (const auto& poly : sc.forbidden)
+      if (inPolygon(poly, truth.x, truth.y)) m.entered_forbidden = true;
+    if (sc.reach &&
+        std::hypot(truth.x - sc.reach->first.x, truth.y - sc.reach->first.y) <= sc.reach->second)
+      reached = true;
+    if (walker && user) {
+      // Fidelity where the user's own command is free of collisions.
+      const Twist uc{std::clamp(user->v, robot.v_min, robot.v_max),
+                     std::clamp(user->w, -robot.w_max, robot.w_max)};
+      const Trajectory ut = rollout(navigator.costmap(), navigator.odomPose(), uc, nav.sim_time,
+                                    nav.sim_step, nav.clearance_influence);
+      if (ut.admissible() && std::abs(uc.v) >= nav.intent_deadband) {
+        fid_sum += std::hypot(cyc.decision.cmd.v - uc.v, cyc.decision.cmd.w - uc.w);
+        ++fid_n;
+      }
+    }
+    if (log.is_open()) {
+      const TPose2D est = navigator.mapPose();
+      log << fmt(t) << "," << fmt(truth.x) << "," << fmt(truth.y) << "," << fmt(truth.yaw, 4) << ","
+          << fmt(est.x) << "," << fmt(est.y) << "," << fmt(est.phi, 4) << ","
+          << (user ? fmt(user->v) : "") << "," << (user ? fmt(user->w) : "") << ","
+          << fmt(cyc.plan.cmd.v) << "," << fmt(cyc.plan.cmd.w, 4) << "," << fmt(cyc.decision.cmd.v)
+          << "," << fmt(cyc.decision.cmd.w, 4) << "," << safetyActionName(cyc.decision.action)
+          << ",\"" << cyc.decision.reason << "\"," << fmt(cl) << "," << cyc.obstacles << ",\""
+          << cyc.plan.note << "\"\n";
+    }
+    if (tty && k % 20 == 0)
+      std::cerr << "\r[navigate] " << sc.name << " t " << fmt(t, 1) << " / " << sc.duration
+                << " s, clearance " << fmt(cl, 2) << " m, " << sim.collisions() << " collisions   "
+                << std::flush;
+    if (goal_mode && cyc.goal_reached) {
+      goal_reached = true;
+      t_end = t;
+      break;
+    }
+    // Replan every 2 s from the localised pose with the obstacles the robot
+    // has seen marked on the map (boxes and people the map does not show);
+    // when that finds no route, the last one stays.
+    if (goal_mode && gp && k > 0 && k % static_cast<size_t>(2 * o.control_rate) == 0) {
+      const TPose2D mp = navigator.mapPose();
+      mrpt::maps::COccupancyGridMap2D seen = world->grid();
+      for (const auto& q : navigator.obstaclesInMap())
+        if (q.x > seen.getXMin() && q.x < seen.getXMax() && q.y > seen.getYMin() &&
+            q.y < seen.getYMax())
+          seen.setPos(q.x, q.y, 0.0f);
+      const GlobalPlanner gp2(seen, fp.inscribed, nav);
+      // Keep the route while it is clear of what the robot has seen (a
+      // route that flips between two equal detours makes the robot dither).
+      std::vector<TPoint2D> ahead{{mp.x, mp.y}};
+      if (route) ahead.insert(ahead.end(), route->waypoints.begin(), route->waypoints.end());
+      const bool blocked = !route || !gp2.polylineClear(ahead, fp.circumscribed + 0.2);
+      if (blocked && gp2.isFree(mp.x, mp.y) && gp2.isFree(goal->x, goal->y))
+        if (auto r2 = gp2.plan({mp.x, mp.y}, {goal->x, goal->y})) {
+          route = r2;
+          navigator.setRoute(withStart({mp.x, mp.y}, route->waypoints), *goal);
+        }
+    }
+  }
+  if (tty) std::cerr << "\n";
+  m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  m.collisions = sim.collisions();
+  m.duration_s = goal_reached ? t_end : sim.time();
+  m.path_length_m = sim.distance();
+  m.mean_speed_mps = m.duration_s > 0 ? m.path_length_m / m.duration_s : 0;
+  m.mean_clearance_m = m.cycles ? clear_sum / m.cycles : 0;
+  m.cycle_ms_mean = m.cycles ? cycle_ms_sum / m.cycles : 0;
+  m.depth_frames = depth_frames;
+  m.perception_ms_mean = depth_frames ? perceive_ms / depth_frames : 0;
+  m.intent_fidelity = fid_n ? fid_sum / fid_n : std::numeric_limits<double>::quiet_NaN();
+  const sim::Pose2 end = sim.groundTruth();
+  if (goal_mode) m.final_goal_error_m = std::hypot(end.x - goal->x, end.y - goal->y);
+
+  // Outcome.
+  if (m.collisions > 0)
+    m.outcome = std::to_string(m.collisions) + " collision(s)";
+  else if (m.entered_forbidden)
+    m.outcome = "entered a forbidden region";
+  else if (goal_mode && !route)
+    m.outcome = sc.path_exists ? "no route to the goal" : "no route (as expected)";
+  else if (goal_mode && !goal_reached)
+    m.outcome = "goal not reached in " + fmt(sc.duration, 0) + " s";
+  else if (sc.reach && !reached)
+    m.outcome = "did not reach the target region";
+  else
+    m.outcome = goal_mode ? "goal reached" : "ok";
+  m.success = m.collisions == 0 && !m.entered_forbidden &&
+              (goal_mode ? (goal_reached || (!route && !sc.path_exists)) : true) &&
+              (!sc.reach || reached);
+
+  if (!o.out_dir.empty()) {
+    io::RenderOptions ro;
+    ro.title = "carenav navigate " + sc.name + " (" + nav.plugin + "): robot red" +
+               std::string(walker ? ", user's intended path blue" : ", route blue") + ", " +
+               m.outcome;
+    if (walker) {
+      io::Overlay u;
+      u.points = user_path;
+      u.colour = {40, 80, 220};
+      ro.overlays.push_back(u);
+    } else if (route) {
+      io::Overlay r;
+      r.points.push_back({sc.start.x, sc.start.y});
+      for (const auto& w : route->waypoints) r.points.push_back(w);
+      r.colour = {40, 80, 220};
+      ro.overlays.push_back(r);
+    }
+    io::Overlay obs;
+    for (const auto& p : navigator.obstaclesInMap()) obs.points.push_back(p);
+    obs.colour = {255, 140, 0};
+    obs.points_only = true;
+    ro.overlays.push_back(obs);
+    for (const auto& poly : sc.forbidden) {
+      io::Overlay f;
+      f.points = poly;
+      f.points.push_back(poly.front());
+      f.colour = {200, 0, 200};
+      ro.overlays.push_back(f);
+    }
+    io::Overlay tr;
+    tr.points = truth_path;
+    tr.colour = {220, 30, 30};
+    tr.start_end_markers = true;
+    ro.overlays.push_back(tr);
+    const std::string png = (fs::path(o.out_dir) / "run.png").string();
+    io::renderGridMapPng(world->grid(), png, ro);
+    m.outputs.push_back(png);
+    m.outputs.push_back((fs::path(o.out_dir) / "navlog.csv").string());
+    const std::string js = (fs::path(o.out_dir) / "summary.json").string();
+    std::ofstream(js) << m.toJson() << "\n";
+    m.outputs.push_back(js);
+  }
+  return m;
+}
+
+std::string RunMetrics::toJson() const {
+  JsonWriter j;
+  j.beginObject();
+  j.key("scenario").value(scenario);
+  j.key("plugin").value(plugin);
+  j.key("success").value(success);
+  j.key("outcome").value(outcome);
+  j.key("collisions").value(static_cast<uint64_t>(collisions));
+  j.key("min_clearance_m").value(std::isfinite(min_clearance_m) ? min_clearance_m : 0.0);
+  j.key("mean_clearance_m").value(mean_clearance_m);
+  j.key("duration_s").value(duration_s);
+  j.key("path_length_m").value(path_length_m);
+  j.key("mean_speed_mps").value(mean_speed_mps);
+  if (std::isnan(intent_fidelity))
+    j.key("intent_fidelity").null();
+  else
+    j.key("intent_fidelity").value(intent_fidelity);
+  j.key("final_goal_error_m").value(final_goal_error_m);
+  j.key("cycles").value(static_cast<uint64_t>(cycles));
+  j.key("stops").value(static_cast<uint64_t>(stops));
+  j.key("slowed").value(static_cast<uint64_t>(slowed));
+  j.key("cycle_ms_mean").value(cycle_ms_mean);
+  j.key("cycle_ms_max").value(cycle_ms_max);
+  j.key("depth_frames").value(static_cast<uint64_t>(depth_frames));
+  j.key("perception_ms_mean").value(perception_ms_mean);
+  j.key("wall_seconds").value(wall_seconds);
+  j.endObject();
+  return j.str();
+}
+
+}  // namespace carenav::navigation

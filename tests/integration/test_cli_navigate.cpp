@@ -1,0 +1,191 @@
+// `carenav navigate` on the shipped scenarios, in the simulator: the
+// walker's safety behaviours and goal navigation, measured from the
+// simulator's ground truth.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <regex>
+
+#include "cli_helpers.h"
+
+using namespace carenav_test;
+
+namespace {
+
+const std::string kScenarios = kSrc + "/maps/scenarios/";
+
+std::optional<double> jsonReal(const std::string& json, const std::string& key) {
+  std::smatch m;
+  if (!std::regex_search(json, m, std::regex("\"" + key + "\": (-?[0-9.]+(?:[eE][-+]?[0-9]+)?)")))
+    return std::nullopt;
+  return std::stod(m[1]);
+}
+
+bool jsonTrue(const std::string& json, const std::string& key) {
+  return json.find("\"" + key + "\": true") != std::string::npos;
+}
+
+struct NavRun {
+  RunResult r;
+  std::string json;
+};
+
+NavRun navigate(const std::string& scenario, const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> args = {"-q", "navigate", "--scenario", kScenarios + scenario, "--json"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  NavRun run{carenav(args), ""};
+  run.json = run.r.out;
+  return run;
+}
+
+/** Last value of a column of navlog.csv. */
+std::vector<std::vector<std::string>> readCsv(const fs::path& p) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(slurp(p));
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::string cell;
+    bool quoted = false;
+    for (char c : line) {
+      if (c == '"')
+        quoted = !quoted;
+      else if (c == ',' && !quoted) {
+        cells.push_back(cell);
+        cell.clear();
+      } else
+        cell += c;
+    }
+    cells.push_back(cell);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+}  // namespace
+
+TEST(CliNavigate, HelpListsThePlugins) {
+  const RunResult r = carenav({"navigate", "--help"});
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("user-intent-dwa"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("goal-dwa"), std::string::npos);
+  EXPECT_EQ(carenav({"navigate"}).code, 2);  // neither --scenario nor --suite
+}
+
+// The walker is pushed towards stairs going down: only the depth camera
+// through the perception pipeline (RRT-GPD ground plane) sees the drop; the
+// walker must stop before the edge without a collision.
+TEST(CliNavigate, WalkerStopsBeforeStairsGoingDown) {
+  const auto out = scratch() / "nav_stairs";
+  fs::remove_all(out);
+  const NavRun run = navigate("walker-stairs-down.yaml", {"--out", out.string()});
+  ASSERT_EQ(run.r.code, 0) << run.r.err;
+  EXPECT_TRUE(jsonTrue(run.json, "success")) << run.json;
+  EXPECT_EQ(jsonReal(run.json, "collisions"), 0.0);
+  EXPECT_GT(jsonReal(run.json, "depth_frames").value_or(0), 100.0);  // 10 Hz over 30 s
+  // The walker went towards the stairs (start x = 2, edge x = 6) and stopped.
+  const auto rows = readCsv(out / "walker-stairs-down" / "navlog.csv");
+  ASSERT_GT(rows.size(), 250u);
+  const double final_x = std::stod(rows.back()[1]);
+  EXPECT_GT(final_x, 4.0);
+  EXPECT_LT(final_x + 0.25, 6.0);                         // the walker's front is short of the edge
+  EXPECT_LT(std::abs(std::stod(rows.back()[11])), 0.02);  // and commanded to stop
+  // The picture of the run is a PNG.
+  EXPECT_EQ(slurp(out / "walker-stairs-down" / "run.png").substr(1, 3), "PNG");
+}
+
+// A free corridor: the user's command passes (intent fidelity ~0) and a
+// closed door is refused even while the user keeps pushing towards it.
+TEST(CliNavigate, WalkerFollowsAFreePathAndRefusesAClosedDoor) {
+  NavRun run = navigate("walker-corridor-free.yaml");
+  ASSERT_EQ(run.r.code, 0) << run.r.err;
+  EXPECT_TRUE(jsonTrue(run.json, "success")) << run.json;
+  EXPECT_LT(jsonReal(run.json, "intent_fidelity").value_or(1), 0.02) << run.json;
+  EXPECT_GT(jsonReal(run.json, "path_length_m").value_or(0), 7.0);
+
+  run = navigate("walker-closed-door.yaml");
+  ASSERT_EQ(run.r.code, 0) << run.r.err;
+  EXPECT_TRUE(jsonTrue(run.json, "success")) << run.json;
+  EXPECT_EQ(jsonReal(run.json, "collisions"), 0.0);
+  // From x = 5 towards the door at x = 8: it came close, and its front
+  // (0.25 m ahead of the axle) stayed short of the door.
+  EXPECT_GT(jsonReal(run.json, "path_length_m").value_or(0), 1.5) << run.json;
+  EXPECT_LT(jsonReal(run.json, "path_length_m").value_or(9), 3.0 - 0.25) << run.json;
+}
+
+// Goal navigation (Interbot): past boxes the map does not show, localised on
+// the map from the simulated laser; and a goal behind a closed door is not
+// forced.
+TEST(CliNavigate, GoalNavigationReachesTheGoalAndDoesNotForceAClosedDoor) {
+  NavRun run = navigate("goal-corridor-boxes.yaml");
+  ASSERT_EQ(run.r.code, 0) << run.r.err;
+  EXPECT_TRUE(jsonTrue(run.json, "success")) << run.json;
+  EXPECT_LT(jsonReal(run.json, "final_goal_error_m").value_or(9), 0.6);
+  EXPECT_EQ(jsonReal(run.json, "collisions"), 0.0);
+
+  run = navigate("goal-closed-door.yaml");
+  ASSERT_EQ(run.r.code, 0) << run.r.err;
+  EXPECT_NE(run.json.find("no route (as expected)"), std::string::npos) << run.json;
+  EXPECT_LT(jsonReal(run.json, "path_length_m").value_or(9), 0.1);
+}
+
+// The safety supervisor in closed loop: when the user's command stops
+// arriving the walker stops.
+TEST(CliNavigate, WalkerStopsWhenTheUserStopsCommanding) {
+  const auto dir = scratch() / "nav_stale";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // The user pushes for 4 s, then lets go.
+  std::ofstream(dir / "s.yaml")
+      << "format: 1\nworld: " << kSrc << "/maps/worlds/nav/corridor.yaml\nprofile: " << kSrc
+      << "/ini/isr-aiwalker.ini\nstart: [2, 1.5, 0]\n"
+         "intent:\n  - [0, 0.3, 0]\n  - [4, 0, 0]\nduration: 8\nend: true\n";
+  const RunResult r =
+      carenav({"-q", "navigate", "--scenario", (dir / "s.yaml").string(), "--out", dir.string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = readCsv(dir / "s" / "navlog.csv");
+  ASSERT_GT(rows.size(), 70u);
+  // After the user let go, every command is a stop and the walker comes to rest.
+  for (const auto& row : rows)
+    if (row[0] != "t" && std::stod(row[0]) > 4.15) {
+      EXPECT_EQ(row[13], "stop") << row[0];
+      EXPECT_EQ(std::stod(row[11]), 0.0);
+    }
+  EXPECT_NE(rows.back()[14].find("user stopped"), std::string::npos);
+}
+
+TEST(CliNavigate, BadScenarioFilesExitTwoWithTheLine) {
+  const auto dir = scratch() / "nav_bad";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string head = "format: 1\nworld: " + kSrc +
+                           "/maps/worlds/nav/corridor.yaml\nprofile: " + kSrc +
+                           "/ini/isr-aiwalker.ini\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"empty.yaml", ""},
+      {"truncated.yaml", head + "start: [2, 1.5, 0]\nintent:\n  - [0, 0.3, 0]\n"},
+      {"unknown.yaml",
+       head + "start: [2, 1.5, 0]\nspeed: 3\nintent:\n  - [0, 0.3, 0]\nend: true\n"},
+      {"badnum.yaml", head + "start: [2, x, 0]\nintent:\n  - [0, 0.3, 0]\nend: true\n"},
+      {"both.yaml",
+       head + "start: [2, 1.5, 0]\ngoal: [5, 1.5, 0]\nintent:\n  - [0, 0.3, 0]\nend: true\n"},
+      {"wall.yaml", head + "start: [0.02, 1.5, 0]\nintent:\n  - [0, 0.3, 0]\nend: true\n"},
+  };
+  for (const auto& [name, text] : cases) {
+    std::ofstream(dir / name) << text;
+    const RunResult r = carenav({"navigate", "--scenario", (dir / name).string()});
+    EXPECT_EQ(r.code, 2) << name << ": " << r.err;
+    EXPECT_NE(r.err.find(name), std::string::npos) << name << ": " << r.err;
+  }
+  // The wrong plugin for the scenario's kind.
+  const RunResult r = carenav(
+      {"navigate", "--scenario", kScenarios + "walker-corridor-free.yaml", "--plugin", "goal-dwa"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("user-intent-dwa"), std::string::npos) << r.err;
+  EXPECT_EQ(carenav({"navigate", "--scenario", kScenarios + "walker-corridor-free.yaml", "--plugin",
+                     "teb"})
+                .code,
+            2);
+}

@@ -1,0 +1,152 @@
+// Local cost map: distance transform, footprint queries, obstacle memory.
+#include <carenav/common/errors.h>
+#include <carenav/navigation/local_map.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace carenav::navigation {
+namespace {
+
+TEST(DistanceTransform, MatchesBruteForceOnRandomGrids) {
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int nx = 5 + static_cast<int>(rng() % 40), ny = 5 + static_cast<int>(rng() % 40);
+    std::vector<uint8_t> free(static_cast<size_t>(nx) * ny, 1);
+    const int obstacles = static_cast<int>(rng() % 12);  // 0: no obstacle at all
+    std::vector<std::pair<int, int>> obs;
+    for (int k = 0; k < obstacles; ++k) {
+      const int x = static_cast<int>(rng() % nx), y = static_cast<int>(rng() % ny);
+      free[static_cast<size_t>(y) * nx + x] = 0;
+      obs.emplace_back(x, y);
+    }
+    const auto d2 = squaredDistanceTransform(free, nx, ny);
+    for (int y = 0; y < ny; ++y)
+      for (int x = 0; x < nx; ++x) {
+        double best = std::numeric_limits<double>::infinity();
+        for (const auto& [ox, oy] : obs)
+          best = std::min(best, double(x - ox) * (x - ox) + double(y - oy) * (y - oy));
+        const float got = d2[static_cast<size_t>(y) * nx + x];
+        if (std::isinf(best))
+          EXPECT_TRUE(std::isinf(got));
+        else
+          ASSERT_FLOAT_EQ(got, static_cast<float>(best)) << trial << " at " << x << "," << y;
+      }
+  }
+}
+
+NavigationParams params() {
+  NavigationParams p;
+  p.local_size = 6;
+  p.resolution = 0.05;
+  return p;
+}
+
+// The walker's outline (ini/isr-aiwalker.ini): 0.25 ahead of the axle, 0.45
+// behind, 0.325 to each side.
+Footprint walker() {
+  return Footprint({{0.25, 0.325}, {-0.45, 0.325}, {-0.45, -0.325}, {0.25, -0.325}}, 0.05);
+}
+
+std::vector<TPoint2D> wallAtX(double x, double y0, double y1) {
+  std::vector<TPoint2D> w;
+  for (double y = y0; y <= y1; y += 0.02) w.push_back({x, y});
+  return w;
+}
+
+TEST(Footprint, RadiiAndSamples) {
+  const Footprint f = walker();
+  EXPECT_NEAR(f.inscribed, 0.25, 1e-9);
+  EXPECT_NEAR(f.circumscribed, std::hypot(0.45, 0.325), 1e-9);
+  EXPECT_GT(f.boundary.size(), 40u);
+  EXPECT_GT(f.interior.size(), 100u);
+  EXPECT_TRUE(f.contains(0, 0));
+  EXPECT_FALSE(f.contains(0.3, 0));
+  EXPECT_THROW(Footprint({{0, 0}, {1, 0}}, 0.05), InputError);
+  EXPECT_THROW(Footprint({{0, 0}, {1, 0}, {2, 0}}, 0.05), InputError);
+}
+
+TEST(LocalCostmap, ClearanceToAWallAheadMatchesTheGeometry) {
+  LocalCostmap m(params(), walker());
+  m.build({0, 0}, wallAtX(1.0, -1, 1));
+  // Front of the footprint at 0.25: 0.75 m to the wall (within a cell).
+  const auto c = m.check({0, 0, 0});
+  EXPECT_FALSE(c.collision);
+  EXPECT_NEAR(c.clearance, 0.75, 0.06);
+  // Facing away, the rear (0.45 m behind the axle) is what comes closest.
+  EXPECT_NEAR(m.check({0, 0, M_PI}).clearance, 0.55, 0.06);
+  // Moved up to the wall: collision.
+  EXPECT_TRUE(m.check({0.76, 0, 0}).collision);
+  EXPECT_EQ(m.cellCost(1.0, 0.0), 100);
+  EXPECT_EQ(m.cellCost(-1.0, 0.0), 0);
+  // A cap bounds the answer far from everything.
+  EXPECT_NEAR(m.check({-1.5, 0, 0}, 0.3).clearance, 0.3, 1e-9);
+}
+
+TEST(LocalCostmap, AnObstacleInsideTheFootprintIsACollision) {
+  LocalCostmap m(params(), walker());
+  // A single post under the middle of the walker, far from its outline.
+  m.build({0, 0}, {{-0.1, 0.0}});
+  const auto c = m.check({0, 0, 0});
+  EXPECT_TRUE(c.collision);
+  EXPECT_EQ(c.clearance, 0);
+  EXPECT_FALSE(m.check({1.0, 0, 0}).collision);
+}
+
+TEST(LocalCostmap, LeavingTheGridIsReported) {
+  LocalCostmap m(params(), walker());
+  m.build({0, 0}, {});
+  EXPECT_TRUE(m.check({2.9, 0, 0}).outside);
+  EXPECT_TRUE(m.check({10, 0, 0}).outside);
+  EXPECT_FALSE(m.check({1, 0, 0}).outside);
+  EXPECT_LT(m.distance(10, 0), 0);
+}
+
+TEST(LocalCostmap, StaticMapCellsAreObstacles) {
+  mrpt::maps::COccupancyGridMap2D grid(-5, 5, -5, 5, 0.05);
+  grid.fill(0.9f);                                                   // free everywhere
+  for (double y = -5; y < 5; y += 0.05) grid.setPos(1.5, y, 0.05f);  // a wall at x = 1.5
+  LocalCostmap m(params(), walker());
+  m.build({0, 0}, {}, &grid);
+  EXPECT_GT(m.obstacleCells(), 50u);
+  EXPECT_NEAR(m.check({0, 0, 0}).clearance, 1.25, 0.08);
+}
+
+TEST(ObstacleMemory, RemembersForTheirPersistenceThenForgets) {
+  ObstacleMemory mem(0.05, 5.0, 3.0);
+  mem.addPoints({{1, 0}, {1, 0.05}}, 10.0);
+  EXPECT_EQ(mem.size(), 2u);
+  mem.prune(14.9, {0, 0});
+  EXPECT_EQ(mem.size(), 2u);  // still within 5 s
+  mem.prune(15.1, {0, 0});
+  EXPECT_EQ(mem.size(), 0u);
+  // Farther than the radius: dropped at once.
+  mem.addPoints({{4, 0}}, 20.0);
+  mem.prune(20.0, {0, 0});
+  EXPECT_EQ(mem.size(), 0u);
+}
+
+TEST(ObstacleMemory, ARayThroughARememberedCellClearsIt) {
+  ObstacleMemory mem(0.05, 5.0, 5.0);
+  mem.addPoints({{1.0, 0.0}}, 1.0);  // a person stood there
+  WorldScan s;
+  s.origin = {0, 0};
+  s.ends = {{2.0, 0.0}, {0.0, 1.0}};
+  s.hit = {1, 1};
+  mem.add(s, 2.0);  // now the ray goes through to 2 m
+  const auto pts = mem.points();
+  ASSERT_EQ(pts.size(), 2u);  // the two new hits, not the old cell
+  for (const auto& p : pts) EXPECT_GT(std::hypot(p.x - 1.0, p.y), 0.5);
+  // A cell in the sensor's blind zone is kept (nothing is seen there).
+  mem.addPoints({{0.2, 0.0}}, 2.0);
+  s.range_min = 0.5;
+  mem.add(s, 3.0);
+  bool kept = false;
+  for (const auto& p : mem.points()) kept |= std::hypot(p.x - 0.2, p.y) < 0.05;
+  EXPECT_TRUE(kept);
+}
+
+}  // namespace
+}  // namespace carenav::navigation

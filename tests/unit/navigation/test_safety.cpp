@@ -1,0 +1,202 @@
+// The safety supervisor's rules as invariants, and the global route.
+#include <carenav/common/errors.h>
+#include <carenav/navigation/global_planner.h>
+#include <carenav/navigation/safety.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace carenav::navigation {
+namespace {
+
+RobotParams robot() {
+  RobotParams r;
+  r.footprint = {{0.25, 0.325}, {-0.45, 0.325}, {-0.45, -0.325}, {0.25, -0.325}};
+  r.v_max = 0.3;
+  r.v_min = -0.15;
+  r.w_max = 0.75;
+  r.acc_v = 0.5;
+  r.acc_w = 1.0;
+  r.safe_distance = 0.325;
+  return r;
+}
+
+SafetyInput fresh(const LocalCostmap& map, Twist cmd) {
+  SafetyInput in;
+  in.now = 10;
+  in.last_scan_time = 9.95;
+  in.last_odom_time = 9.99;
+  in.plan.ok = true;
+  in.plan.cmd = cmd;
+  in.map = &map;
+  return in;
+}
+
+TEST(Safety, StaleSensorsOdometryOrIntentStop) {
+  NavigationParams p;
+  const SafetySupervisor sup(p, robot());
+  LocalCostmap map(p, Footprint(robot().footprint, p.resolution));
+  map.build({0, 0}, {});
+  SafetyInput in = fresh(map, {0.3, 0});
+  EXPECT_EQ(sup.apply(in).action, SafetyAction::Pass);
+  in.last_scan_time = 10 - p.sensor_timeout - 0.01;
+  auto d = sup.apply(in);
+  EXPECT_EQ(d.action, SafetyAction::Stop);
+  EXPECT_EQ(d.cmd.v, 0);
+  EXPECT_EQ(d.reason, "stale sensor data");
+  in.last_scan_time.reset();  // never had a scan
+  EXPECT_EQ(sup.apply(in).action, SafetyAction::Stop);
+  in = fresh(map, {0.3, 0});
+  in.last_odom_time = 10 - p.odom_timeout - 0.01;
+  EXPECT_EQ(sup.apply(in).reason, "stale odometry");
+  // Walker: the user's command must be fresh and non-zero.
+  in = fresh(map, {0.3, 0});
+  in.needs_intent = true;
+  in.user = Twist{0.3, 0};
+  in.last_intent_time = 9.9;
+  EXPECT_EQ(sup.apply(in).action, SafetyAction::Pass);
+  in.last_intent_time = 10 - p.intent_timeout - 0.01;
+  EXPECT_EQ(sup.apply(in).reason, "stale user command");
+  in.last_intent_time = 9.9;
+  in.user = Twist{0.0, 0.0};
+  EXPECT_EQ(sup.apply(in).reason, "user stopped");
+  // No admissible trajectory.
+  in = fresh(map, {0.3, 0});
+  in.plan.ok = false;
+  in.plan.note = "no admissible trajectory";
+  EXPECT_EQ(sup.apply(in).action, SafetyAction::Stop);
+}
+
+TEST(Safety, NeverCommandsAVelocityThatCannotBrakeBeforeASeenObstacle) {
+  // Random clutter and random commands: whatever the planner asks, the
+  // supervisor's output brakes (proportionally, at the robot's limits)
+  // safe_distance before the first contact along its arc.
+  NavigationParams p;
+  const RobotParams r = robot();
+  const SafetySupervisor sup(p, r);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> U(-1, 1);
+  size_t slowed = 0, stopped = 0, passed = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<TPoint2D> obs;
+    const int n = static_cast<int>(rng() % 6);
+    for (int k = 0; k < n; ++k) {
+      // Posts between 0.4 and 2.5 m away, not under the robot.
+      const double a = U(rng) * M_PI, d = 0.6 + std::abs(U(rng)) * 1.9;
+      obs.push_back({d * std::cos(a), d * std::sin(a)});
+    }
+    LocalCostmap map(p, Footprint(r.footprint, p.resolution));
+    map.build({0, 0}, obs);
+    const Twist asked{0.3 * U(rng) + 0.05, 0.75 * U(rng)};
+    const SafetyDecision d = sup.apply(fresh(map, asked));
+    passed += d.action == SafetyAction::Pass;
+    slowed += d.action == SafetyAction::Slow;
+    stopped += d.action == SafetyAction::Stop;
+    EXPECT_LE(d.cmd.v, r.v_max + 1e-12);
+    EXPECT_GE(d.cmd.v, r.v_min - 1e-12);
+    EXPECT_LE(std::abs(d.cmd.w), r.w_max + 1e-12);
+    if (d.cmd.v == 0 && d.cmd.w == 0) continue;
+    // Same curvature as asked (never steers somewhere else).
+    EXPECT_NEAR(d.cmd.v * std::clamp(asked.w, -r.w_max, r.w_max),
+                d.cmd.w * std::clamp(asked.v, r.v_min, r.v_max), 1e-9);
+    const double ttc = sup.timeToCollision(map, {0, 0, 0}, d.cmd, 30);
+    EXPECT_TRUE(canBrake(d.cmd, ttc, r, r.safe_distance * 0.999))
+        << "trial " << trial << ": (" << d.cmd.v << ", " << d.cmd.w << ") ttc " << ttc;
+  }
+  // The scenes exercise every branch.
+  EXPECT_GT(passed, 10u);
+  EXPECT_GT(slowed, 5u);
+  EXPECT_GT(stopped, 0u);
+}
+
+TEST(Safety, SlowsTowardsAWallAndStopsAtTheSafeDistance) {
+  NavigationParams p;
+  const RobotParams r = robot();
+  const SafetySupervisor sup(p, r);
+  std::vector<TPoint2D> wall;
+  for (double y = -2; y <= 2; y += 0.02) wall.push_back({1.0, y});
+  LocalCostmap map(p, Footprint(r.footprint, p.resolution));
+  map.build({0, 0}, wall);
+  // Contact counts from footprint_padding (0.05 m) on. Front edge 0.75 m
+  // from the wall: 0.3 m/s needs 0.09 m to stop, plus the 0.325 m margin:
+  // allowed.
+  EXPECT_EQ(sup.apply(fresh(map, {0.3, 0})).action, SafetyAction::Pass);
+  // 0.3 m from the wall (inside the margin): stop; backing away is fine.
+  SafetyInput in = fresh(map, {0.3, 0});
+  in.pose = {0.45, 0, 0};
+  EXPECT_EQ(sup.apply(in).action, SafetyAction::Stop);
+  in.plan.cmd = {-0.1, 0};
+  EXPECT_EQ(sup.apply(in).action, SafetyAction::Pass);
+  // 0.55 m from the wall (0.5 m to contact): 0.3 m/s stops within 0.09 m, 0.415 m with the
+  // margin: passes.
+  in.pose = {0.2, 0, 0};
+  in.plan.cmd = {0.3, 0};
+  EXPECT_EQ(sup.apply(in).action, SafetyAction::Pass);
+  // 0.45 m from the wall (0.4 m to contact): capped so that v^2 / 2a <= 0.4 - 0.325.
+  in.pose = {0.3, 0, 0};
+  const auto d = sup.apply(in);
+  EXPECT_EQ(d.action, SafetyAction::Slow);
+  EXPECT_LT(d.cmd.v, 0.3);
+  EXPECT_GT(d.cmd.v, 0.05);
+  EXPECT_LE(d.cmd.v * d.cmd.v / (2 * r.acc_v), 0.4 - r.safe_distance + 0.01);
+}
+
+/** A 10 x 6 m map: two rooms joined by a door in a wall at x = 5. */
+mrpt::maps::COccupancyGridMap2D twoRooms(double door_width, bool unknown_gap) {
+  mrpt::maps::COccupancyGridMap2D g(0, 10, 0, 6, 0.05);
+  g.fill(0.95f);
+  auto wall = [&](double x0, double y0, double x1, double y1, float p) {
+    for (double x = x0; x <= x1; x += 0.025)
+      for (double y = y0; y <= y1; y += 0.025) g.setPos(x, y, p);
+  };
+  wall(0, 0, 10, 0.1, 0.05f);
+  wall(0, 5.9, 10, 6, 0.05f);
+  wall(0, 0, 0.1, 6, 0.05f);
+  wall(9.9, 0, 10, 6, 0.05f);
+  // Dividing wall with a door centred at y = 1.5.
+  wall(4.95, 0, 5.05, 1.5 - door_width / 2, 0.05f);
+  wall(4.95, 1.5 + door_width / 2, 5.05, 6, 0.05f);
+  // A gap of unknown space in the wall near the top (never seen).
+  if (unknown_gap) wall(4.95, 4.0, 5.05, 5.0, 0.5f);
+  return g;
+}
+
+TEST(GlobalPlanner, PassesADoorAndNeverRoutesThroughUnknownSpace) {
+  NavigationParams p;
+  const auto g = twoRooms(1.0, true);
+  const GlobalPlanner gp(g, 0.25, p);
+  const auto r = gp.plan({2, 4.5}, {8, 4.5});
+  ASSERT_TRUE(r.has_value());
+  // The straight line crosses the unknown gap; the route goes through the door.
+  bool through_door = false;
+  for (const auto& c : r->cells) {
+    EXPECT_TRUE(gp.isFree(c.x, c.y));
+    if (std::abs(c.x - 5) < 0.1) {
+      EXPECT_LT(c.y, 2.1) << c.y;
+      through_door = true;
+    }
+  }
+  EXPECT_TRUE(through_door);
+  EXPECT_GT(r->length, 8.0);  // the detour, not the 6 m straight line
+  EXPECT_GE(r->waypoints.size(), 2u);
+  EXPECT_NEAR(r->waypoints.back().x, 8, 1e-9);
+  // Every cell keeps the robot's radius from anything not free, except near
+  // the start and goal.
+  for (const auto& c : r->cells) EXPECT_GT(gp.clearance(c.x, c.y), 0.25);
+}
+
+TEST(GlobalPlanner, NoRouteThroughADoorNarrowerThanTheRobot) {
+  NavigationParams p;
+  const auto g = twoRooms(0.5, false);
+  const GlobalPlanner gp(g, 0.325, p);
+  EXPECT_FALSE(gp.plan({2, 3}, {8, 3}).has_value());
+  const GlobalPlanner small(g, 0.1, p);
+  EXPECT_TRUE(small.plan({2, 3}, {8, 3}).has_value());
+  EXPECT_THROW(gp.plan({2, 3}, {20, 3}), InputError);  // outside the map
+  EXPECT_THROW(gp.plan({2, 3}, {5, 3}), InputError);   // on the wall
+}
+
+}  // namespace
+}  // namespace carenav::navigation
