@@ -20,7 +20,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct NavigateArgs {
-  std::string scenario, suite, profile, plugins, out;
+  std::string scenario, suite, profile, plugins, out, goal;
   std::vector<std::string> sets;
   bool json = false;
   double rate = 10;
@@ -63,6 +63,10 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
                   "Robot profile (default: the scenario's 'profile:'); its [robot], sensors, "
                   "[navigation], [localization] and [sim] sections");
   cmd->add_option("--plugin", a->plugins, plugin_help);
+  cmd->add_option("--goal", a->goal,
+                  "Goal instead of the scenario's: x,y,deg, or a place or room of the places "
+                  "file (\"kitchen/table\", \"kitchen\": its default place, else its most "
+                  "central free cell)");
   cmd->add_option("--set", a->sets, "Override a profile value: section.key=value (repeatable)");
   cmd->add_option("--out", a->out,
                   "Output folder: one subfolder per run (run.png, navlog.csv, "
@@ -98,6 +102,7 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
         o.plugin = p;
         o.profile = a->profile;
         o.sets = a->sets;
+        o.goal = a->goal;
         o.control_rate = a->rate;
         o.progress = !g.quiet;
         if (!a->out.empty())

@@ -131,6 +131,35 @@ TEST(CliNavigate, GoalNavigationReachesTheGoalAndDoesNotForceAClosedDoor) {
   EXPECT_LT(jsonReal(run.json, "path_length_m").value_or(9), 0.1);
 }
 
+// Goals by name (issue 7): a place of the places file beside the world.
+TEST(CliNavigate, GoalByPlaceName) {
+  const auto dir = scratch() / "nav_places";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "s.yaml") << "format: 1\nworld: " << kSrc
+                                << "/maps/worlds/nav/corridor.yaml\nprofile: " << kSrc
+                                << "/ini/interbot.ini\nplaces: places.yaml\nstart: [1, 1.5, 0]\n"
+                                   "goal: [3, 1.5, 0]\nduration: 90\nend: true\n";
+  ASSERT_EQ(carenav({"places", "add-room", "Far end", "--rect", "10.5,0.2,13.8,2.8", "--file",
+                     (dir / "places.yaml").string()})
+                .code,
+            0);
+  ASSERT_EQ(carenav({"places", "add-place", "Window", "--pose", "12.5,1.5,0", "--file",
+                     (dir / "places.yaml").string()})
+                .code,
+            0);
+  RunResult r = carenav({"-q", "navigate", "--scenario", (dir / "s.yaml").string(), "--goal",
+                         "far end/window", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"goal_name\": \"Far end/Window\""), std::string::npos) << r.out;
+  EXPECT_TRUE(jsonTrue(r.out, "success")) << r.out;
+  EXPECT_LT(jsonReal(r.out, "final_goal_error_m").value_or(9), 0.6) << r.out;
+  // An unknown name: exit 2, nothing run.
+  r = carenav({"-q", "navigate", "--scenario", (dir / "s.yaml").string(), "--goal", "Kitchen"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("Kitchen"), std::string::npos) << r.err;
+}
+
 // The safety supervisor in closed loop: when the user's command stops
 // arriving the walker stops.
 TEST(CliNavigate, WalkerStopsWhenTheUserStopsCommanding) {

@@ -25,6 +25,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <sstream>
 
 namespace carenav::navigation {
 
@@ -100,7 +101,21 @@ std::string fmt(double v, int prec = 3) {
 
 }  // namespace
 
-RunMetrics runScenario(const Scenario& sc, const RunOptions& o) {
+RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
+  Scenario sc = scenario;
+  if (!o.goal.empty()) {
+    if (!sc.intent.empty())
+      throw InputError(sc.file + ": --goal given for a scenario that scripts a user (intent)");
+    sc.goal.reset();
+    sc.goal_name.clear();
+    double x, y, deg;
+    char c1, c2, extra;
+    std::istringstream in(o.goal);
+    if ((in >> x >> c1 >> y >> c2 >> deg) && c1 == ',' && c2 == ',' && !(in >> extra))
+      sc.goal = TPose2D{x, y, mrpt::DEG2RAD(deg)};
+    else
+      sc.goal_name = o.goal;
+  }
   // Profile: --profile, else the scenario's.
   const std::string profile_path = !o.profile.empty() ? o.profile : sc.profile;
   if (profile_path.empty())
@@ -156,6 +171,7 @@ RunMetrics runScenario(const Scenario& sc, const RunOptions& o) {
 
   RunMetrics m;
   m.scenario = sc.name;
+  m.goal_name = goal_label;
   m.plugin = nav.plugin;
 
   // Goal navigation: route on the world's map, localisation on it from the
@@ -415,6 +431,7 @@ std::string RunMetrics::toJson() const {
   j.beginObject();
   j.key("scenario").value(scenario);
   j.key("plugin").value(plugin);
+  if (!goal_name.empty()) j.key("goal_name").value(goal_name);
   j.key("success").value(success);
   j.key("outcome").value(outcome);
   j.key("collisions").value(static_cast<uint64_t>(collisions));

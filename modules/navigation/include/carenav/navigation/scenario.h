@@ -59,6 +59,7 @@ Scenario parseScenario(const std::string& text, const std::string& origin,
 /** Metrics of one run (seed 002 sec. 6.1). */
 struct RunMetrics {
   std::string scenario, plugin;
+  std::string goal_name;  ///< the resolved room/place when the goal was given by name
   bool success = false;
   std::string outcome;  ///< why it failed, or "goal reached" / "ok"
   size_t collisions = 0;
@@ -83,7 +84,10 @@ struct RunOptions {
   std::string plugin;             ///< overrides the scenario's and the profile's
   std::string profile;            ///< overrides the scenario's
   std::vector<std::string> sets;  ///< profile overrides
-  double control_rate = 10;       ///< Hz
+  /** Overrides the scenario's goal: "x,y,deg" or a place/room name
+   *  ("kitchen/table", "kitchen") of the places file. */
+  std::string goal;
+  double control_rate = 10;  ///< Hz
   bool progress = false;
 };
 
