@@ -4,12 +4,18 @@
 #include <carenav/navigation/local_planner.h>
 #include <carenav/navigation/scenario.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <sstream>
+#include <stdexcept>
 
 #include "commands.h"
 
@@ -40,6 +46,149 @@ std::string cell(double v, int prec = 2) {
   char b[32];
   std::snprintf(b, sizeof b, "%.*f", prec, v);
   return b;
+}
+
+/** RunMetrics as "key<TAB>value" lines (outputs repeated), and back. */
+std::string serialize(const navigation::RunMetrics& m) {
+  std::ostringstream o;
+  o.precision(17);
+  auto line = [&](const char* k, const auto& v) { o << k << '\t' << v << '\n'; };
+  line("scenario", m.scenario);
+  line("plugin", m.plugin);
+  line("goal_name", m.goal_name);
+  line("success", m.success);
+  line("outcome", m.outcome);
+  line("collisions", m.collisions);
+  line("min_clearance_m", m.min_clearance_m);
+  line("mean_clearance_m", m.mean_clearance_m);
+  line("duration_s", m.duration_s);
+  line("path_length_m", m.path_length_m);
+  line("mean_speed_mps", m.mean_speed_mps);
+  line("intent_fidelity", m.intent_fidelity);
+  line("cycles", m.cycles);
+  line("stops", m.stops);
+  line("slowed", m.slowed);
+  line("cycle_ms_mean", m.cycle_ms_mean);
+  line("cycle_ms_max", m.cycle_ms_max);
+  line("depth_frames", m.depth_frames);
+  line("perception_ms_mean", m.perception_ms_mean);
+  line("final_goal_error_m", m.final_goal_error_m);
+  line("wall_seconds", m.wall_seconds);
+  line("entered_forbidden", m.entered_forbidden);
+  for (const auto& f : m.outputs) line("output", f);
+  return o.str();
+}
+
+navigation::RunMetrics deserialize(const std::string& text) {
+  navigation::RunMetrics m;
+  std::istringstream in(text);
+  std::string l;
+  while (std::getline(in, l)) {
+    const auto tab = l.find('\t');
+    if (tab == std::string::npos) continue;
+    const std::string k = l.substr(0, tab), v = l.substr(tab + 1);
+    const double d = std::strtod(v.c_str(), nullptr);
+    const auto n = static_cast<size_t>(d);
+    if (k == "scenario")
+      m.scenario = v;
+    else if (k == "plugin")
+      m.plugin = v;
+    else if (k == "goal_name")
+      m.goal_name = v;
+    else if (k == "success")
+      m.success = v == "1";
+    else if (k == "outcome")
+      m.outcome = v;
+    else if (k == "collisions")
+      m.collisions = n;
+    else if (k == "min_clearance_m")
+      m.min_clearance_m = d;
+    else if (k == "mean_clearance_m")
+      m.mean_clearance_m = d;
+    else if (k == "duration_s")
+      m.duration_s = d;
+    else if (k == "path_length_m")
+      m.path_length_m = d;
+    else if (k == "mean_speed_mps")
+      m.mean_speed_mps = d;
+    else if (k == "intent_fidelity")
+      m.intent_fidelity = d;
+    else if (k == "cycles")
+      m.cycles = n;
+    else if (k == "stops")
+      m.stops = n;
+    else if (k == "slowed")
+      m.slowed = n;
+    else if (k == "cycle_ms_mean")
+      m.cycle_ms_mean = d;
+    else if (k == "cycle_ms_max")
+      m.cycle_ms_max = d;
+    else if (k == "depth_frames")
+      m.depth_frames = n;
+    else if (k == "perception_ms_mean")
+      m.perception_ms_mean = d;
+    else if (k == "final_goal_error_m")
+      m.final_goal_error_m = d;
+    else if (k == "wall_seconds")
+      m.wall_seconds = d;
+    else if (k == "entered_forbidden")
+      m.entered_forbidden = v == "1";
+    else if (k == "output")
+      m.outputs.push_back(v);
+  }
+  return m;
+}
+
+/** Runs one scenario of a suite in a child process: every run starts from a
+ *  fresh process, so nothing one run leaves behind (caches, global random
+ *  generators, here or in MRPT) changes the next, and a crash ends one run,
+ *  not the suite. */
+navigation::RunMetrics runInChild(const navigation::Scenario& s, const navigation::RunOptions& o) {
+  int fd[2];
+  if (pipe(fd) != 0) throw std::runtime_error("navigate: cannot create a pipe");
+  std::cout.flush();
+  std::cerr.flush();
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("navigate: cannot fork");
+  if (pid == 0) {
+    close(fd[0]);
+    std::string out;
+    try {
+      out = "OK\n" + serialize(navigation::runScenario(s, o));
+    } catch (const InputError& e) {
+      out = std::string("INPUT\n") + e.what();
+    } catch (const std::exception& e) {
+      out = std::string("ERROR\n") + e.what();
+    }
+    size_t done = 0;
+    while (done < out.size()) {
+      const ssize_t w = write(fd[1], out.data() + done, out.size() - done);
+      if (w <= 0) break;
+      done += static_cast<size_t>(w);
+    }
+    close(fd[1]);
+    _exit(0);
+  }
+  close(fd[1]);
+  std::string text;
+  char buf[4096];
+  ssize_t r;
+  while ((r = read(fd[0], buf, sizeof buf)) > 0) text.append(buf, static_cast<size_t>(r));
+  close(fd[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  const auto nl = text.find('\n');
+  const std::string tag = text.substr(0, nl),
+                    body = nl == std::string::npos ? "" : text.substr(nl + 1);
+  if (tag == "OK") return deserialize(body);
+  if (tag == "INPUT") throw InputError(body);
+  if (tag == "ERROR") throw std::runtime_error(body);
+  navigation::RunMetrics m;
+  m.scenario = s.name;
+  m.plugin = o.plugin;
+  m.outcome = WIFSIGNALED(status) ? "crashed (signal " + std::to_string(WTERMSIG(status)) + ")"
+                                  : "ended without a result";
+  return m;
 }
 
 void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
@@ -108,7 +257,7 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
         if (!a->out.empty())
           o.out_dir = (fs::path(a->out) / (s.name + (p.empty() ? "" : "-" + p))).string();
         try {
-          runs.push_back(navigation::runScenario(s, o));
+          runs.push_back(single ? navigation::runScenario(s, o) : runInChild(s, o));
         } catch (const InputError& e) {
           // A plugin that does not fit the scenario (walker vs goal) is
           // skipped in a side-by-side run; alone it is an error.

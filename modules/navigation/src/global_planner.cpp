@@ -16,7 +16,9 @@ GlobalPlanner::GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double 
       res_(map.getResolution()),
       radius_(robot_radius + p.plan_clearance),
       influence_(robot_radius + p.plan_clearance + 0.5),
-      weight_(p.plan_cost_weight) {
+      weight_(p.plan_cost_weight),
+      passage_margin_(p.passage_margin),
+      passage_approach_(p.passage_approach) {
   free_.resize(static_cast<size_t>(nx_) * ny_);
   for (int y = 0; y < ny_; ++y)
     for (int x = 0; x < nx_; ++x)
@@ -153,16 +155,85 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
   for (int32_t i = idx(gx, gy); i >= 0; i = parent[i]) cells.emplace_back(i % nx_, i / nx_);
   std::reverse(cells.begin(), cells.end());
   for (const auto& [x, y] : cells) r.cells.push_back({map_.idx2x(x), map_.idx2y(y)});
-  // Corners: from each anchor, the farthest cell still in line of sight.
-  size_t anchor = 0;
-  while (anchor + 1 < cells.size()) {
-    size_t next = anchor + 1;
-    while (next + 1 < cells.size() && lineOfSight(cells[anchor].first, cells[anchor].second,
-                                                  cells[next + 1].first, cells[next + 1].second))
-      ++next;
-    r.waypoints.push_back(r.cells[next]);
-    anchor = next;
+  // Narrow passages (doorways): runs of path cells closer than
+  // passage_clearance to anything not free. Each is crossed straight: a
+  // waypoint before it, its throat (the narrowest cell of the run) and one
+  // after it, along the axis across the passage (seed 002: intermediate
+  // goals at doorways, reached with in-place turns).
+  struct Passage {
+    size_t centre;
+    TPoint2D before, mid, after;
+  };
+  std::vector<Passage> passages;
+  const double narrow = radius_ + passage_margin_;
+  for (size_t i = 0; i < cells.size();) {
+    auto clear = [&](size_t k) {
+      return dist_[static_cast<size_t>(cells[k].second) * nx_ + cells[k].first];
+    };
+    if (clear(i) >= narrow) {
+      ++i;
+      continue;
+    }
+    size_t j = i, best = i;
+    while (j < cells.size() && clear(j) < narrow) {
+      if (clear(j) < clear(best)) best = j;  // the throat
+      ++j;
+    }
+    // Only real passages (obstacles on both sides), not a path along one wall:
+    // the clearance grows on both sides along the crossing axis.
+    const TPoint2D c = r.cells[best];
+    const TPoint2D a = r.cells[i > 0 ? i - 1 : i], b = r.cells[std::min(j, cells.size() - 1)];
+    double ax = b.x - a.x, ay = b.y - a.y;
+    // Crossing axis: of 16 directions, the one along which the clearance
+    // rises most on both sides (a saddle of the distance field).
+    double best_gain = -1e9, ux = 0, uy = 0;
+    for (int k = 0; k < 16; ++k) {
+      const double th = M_PI * k / 16;
+      const double dx = std::cos(th), dy = std::sin(th);
+      const double gain = std::min(clearance(c.x + dx * 0.4, c.y + dy * 0.4),
+                                   clearance(c.x - dx * 0.4, c.y - dy * 0.4));
+      if (gain > best_gain) best_gain = gain, ux = dx, uy = dy;
+    }
+    if (ux * ax + uy * ay < 0) ux = -ux, uy = -uy;  // in the direction of travel
+    const double d = passage_approach_;
+    const TPoint2D pre{c.x - ux * d, c.y - uy * d}, post{c.x + ux * d, c.y + uy * d};
+    if (best_gain > clearance(c.x, c.y) && isPassable(pre.x, pre.y) &&
+        isPassable(post.x, post.y))
+      passages.push_back({best, pre, c, post});
+    i = j;
   }
+  // Corners: from each anchor, the farthest cell still in line of sight;
+  // passages split the path and add their three points.
+  auto simplify = [&](size_t from, size_t to) {  // cells (from, to], `to` included
+    size_t anchor = from;
+    while (anchor < to) {
+      size_t next = anchor + 1;
+      while (next < to && lineOfSight(cells[anchor].first, cells[anchor].second,
+                                      cells[next + 1].first, cells[next + 1].second))
+        ++next;
+      r.waypoints.push_back(r.cells[next]);
+      anchor = next;
+    }
+  };
+  size_t from = 0;
+  for (const auto& ps : passages) {
+    // Up to the approach point: the last cell before the passage.
+    size_t upto = ps.centre;
+    while (upto > from && std::hypot(r.cells[upto].x - ps.mid.x, r.cells[upto].y - ps.mid.y) <
+                              passage_approach_)
+      --upto;
+    if (upto > from) simplify(from, upto);
+    r.waypoints.push_back(ps.before);
+    r.waypoints.push_back(ps.mid);
+    r.waypoints.push_back(ps.after);
+    size_t after = ps.centre;
+    while (after + 1 < cells.size() &&
+           std::hypot(r.cells[after].x - ps.mid.x, r.cells[after].y - ps.mid.y) <
+               passage_approach_)
+      ++after;
+    from = after;
+  }
+  if (from + 1 < cells.size()) simplify(from, cells.size() - 1);
   if (r.waypoints.empty()) r.waypoints.push_back(g);
   r.waypoints.back() = g;
   TPoint2D prev = s;

@@ -53,6 +53,11 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
                 "global route: extra clearance beyond the robot's inscribed radius")
           .real("plan_cost_weight", &P::plan_cost_weight, "", 0, 100,
                 "global route: extra cost near obstacles (keeps routes central)")
+          .real("passage_margin", &P::passage_margin, "m", 0, 5,
+                "global route: cells closer than the robot's radius plus this to an obstacle "
+                "form a narrow passage (a doorway), crossed straight")
+          .real("passage_approach", &P::passage_approach, "m", 0.1, 5,
+                "global route: waypoints this far before and after a passage, on its axis")
           .real("goal_tolerance", &P::goal_tolerance, "m", 0.01, 10,
                 "goal reached within this distance (seed 002: 0.5)")
           .real("goal_tolerance_deg", &P::goal_tolerance_deg, "deg", 0.1, 180,

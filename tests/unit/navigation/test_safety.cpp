@@ -113,6 +113,7 @@ TEST(Safety, NeverCommandsAVelocityThatCannotBrakeBeforeASeenObstacle) {
 
 TEST(Safety, SlowsTowardsAWallAndStopsAtTheSafeDistance) {
   NavigationParams p;
+  p.footprint_padding = 0.05;  // the numbers below count contact from 5 cm
   const RobotParams r = robot();
   const SafetySupervisor sup(p, r);
   std::vector<TPoint2D> wall;

@@ -17,7 +17,10 @@ using mrpt::math::TPoint2D;
 
 struct Route {
   std::vector<TPoint2D> cells;      ///< centres of the cells of the A* path, start to goal
-  std::vector<TPoint2D> waypoints;  ///< corners (line-of-sight simplification), ending at the goal
+  /** Corners (line-of-sight simplification) and, at each narrow passage,
+   *  a point before it, its centre and a point after it on the axis across
+   *  it; ending at the goal. */
+  std::vector<TPoint2D> waypoints;
   double length = 0;                ///< m, along the waypoints
 };
 
@@ -48,6 +51,7 @@ class GlobalPlanner {
   const mrpt::maps::COccupancyGridMap2D& map_;
   int nx_ = 0, ny_ = 0;
   double res_ = 0, radius_ = 0, influence_ = 0, weight_ = 0;
+  double passage_margin_ = 0, passage_approach_ = 0;
   std::vector<uint8_t> free_;
   std::vector<float> dist_;  // m to the nearest non-free cell
 };

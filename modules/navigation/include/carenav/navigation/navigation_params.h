@@ -45,10 +45,12 @@ struct NavigationParams {
   double obstacle_persistence = 5.0;  ///< s, seen obstacles are remembered this long
   double memory_radius = 3.0;         ///< m, remembered obstacles farther away are dropped
   double cost_decay = 0.3;            ///< m, cell cost falls from 100 to 0 over this clearance
-  double footprint_padding = 0.05;    ///< m, closer than this to an obstacle counts as contact
+  double footprint_padding = 0.02;    ///< m, closer than this to an obstacle counts as contact
   // Global route (A* on the inflated static map)
   double plan_clearance = 0.1;  ///< m, extra clearance kept by the route beyond the footprint
   double plan_cost_weight = 2;  ///< extra route cost per metre near obstacles (keeps paths central)
+  double passage_margin = 0.25;   ///< m, route cells closer than radius + this are a narrow passage
+  double passage_approach = 0.6;  ///< m, waypoints before and after a passage, on its axis
   double goal_tolerance = 0.5;  ///< m, goal reached (seed 002)
   double goal_tolerance_deg = 3;  ///< deg, heading at the goal (seed 002: 0.05 rad)
   // Safety supervisor
