@@ -46,5 +46,9 @@ std::string mrptDatasetsDir();
 /** The rooms and places of maps/sena.places.yaml, embedded at build time
  *  (the demo annotates its map of the SENA rawlog with them). */
 const char* senaPlacesYaml();
+/** ini/defaults.ini and ini/isr-aiwalker.ini, embedded at build time (the
+ *  demo's walker run). */
+const char* defaultsIni();
+const char* walkerIni();
 
 }  // namespace carenav::app

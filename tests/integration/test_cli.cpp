@@ -213,6 +213,15 @@ TEST(Cli, DemoSummarisesTheSenaRawlogAndMapsIt) {
   const std::string png = slurp(out / "map_places.png");
   EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
   EXPECT_GT(png.size(), fs::file_size(out / "map.png") / 2);
+  // Step 4: the walker pushed by a scripted user from the log's start to the
+  // Dock in the simulator, on the map just built: reached, no collision.
+  EXPECT_NE(r.out.find("walker to the Dock: reached (goal reached)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(", 0 collisions,"), std::string::npos) << r.out;
+  const std::string walk = slurp(out / "walk" / "summary.json");
+  EXPECT_NE(walk.find("\"success\": true"), std::string::npos) << walk;
+  EXPECT_TRUE(fs::exists(out / "walk" / "run.png"));
+  // The SLAM summary is still the SLAM summary.
+  EXPECT_NE(slurp(out / "summary.json").find("loop_closures"), std::string::npos);
   // The annotated map answers `places where` like any other.
   const RunResult w =
       carenav({"places", "where", "--map", (out / "map.yaml").string(), "--", "-15,-5"});

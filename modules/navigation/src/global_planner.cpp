@@ -197,8 +197,7 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
     if (ux * ax + uy * ay < 0) ux = -ux, uy = -uy;  // in the direction of travel
     const double d = passage_approach_;
     const TPoint2D pre{c.x - ux * d, c.y - uy * d}, post{c.x + ux * d, c.y + uy * d};
-    if (best_gain > clearance(c.x, c.y) && isPassable(pre.x, pre.y) &&
-        isPassable(post.x, post.y))
+    if (best_gain > clearance(c.x, c.y) && isPassable(pre.x, pre.y) && isPassable(post.x, post.y))
       passages.push_back({best, pre, c, post});
     i = j;
   }
@@ -219,8 +218,8 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
   for (const auto& ps : passages) {
     // Up to the approach point: the last cell before the passage.
     size_t upto = ps.centre;
-    while (upto > from && std::hypot(r.cells[upto].x - ps.mid.x, r.cells[upto].y - ps.mid.y) <
-                              passage_approach_)
+    while (upto > from &&
+           std::hypot(r.cells[upto].x - ps.mid.x, r.cells[upto].y - ps.mid.y) < passage_approach_)
       --upto;
     if (upto > from) simplify(from, upto);
     r.waypoints.push_back(ps.before);
@@ -228,8 +227,7 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
     r.waypoints.push_back(ps.after);
     size_t after = ps.centre;
     while (after + 1 < cells.size() &&
-           std::hypot(r.cells[after].x - ps.mid.x, r.cells[after].y - ps.mid.y) <
-               passage_approach_)
+           std::hypot(r.cells[after].x - ps.mid.x, r.cells[after].y - ps.mid.y) < passage_approach_)
       ++after;
     from = after;
   }

@@ -27,33 +27,6 @@ double distanceToPath(const std::vector<TPoint2D>& path, double x, double y) {
   return best;
 }
 
-/** The point `lookahead` metres along the path after the point nearest to
- *  (x, y); the last point when the path is shorter. */
-TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead) {
-  size_t seg = 0;
-  double best = std::numeric_limits<double>::infinity(), best_u = 0;
-  for (size_t i = 0; i + 1 < path.size(); ++i) {
-    const auto& a = path[i];
-    const auto& b = path[i + 1];
-    const double vx = b.x - a.x, vy = b.y - a.y, l2 = vx * vx + vy * vy;
-    const double u = l2 > 0 ? std::clamp(((x - a.x) * vx + (y - a.y) * vy) / l2, 0.0, 1.0) : 0;
-    const double d = std::hypot(a.x + u * vx - x, a.y + u * vy - y);
-    if (d < best) best = d, seg = i, best_u = u;
-  }
-  double left = lookahead;
-  TPoint2D p{path[seg].x + best_u * (path[seg + 1].x - path[seg].x),
-             path[seg].y + best_u * (path[seg + 1].y - path[seg].y)};
-  for (size_t i = seg + 1; i < path.size(); ++i) {
-    const double d = std::hypot(path[i].x - p.x, path[i].y - p.y);
-    if (d >= left) {
-      return {p.x + (path[i].x - p.x) * left / d, p.y + (path[i].y - p.y) * left / d};
-    }
-    left -= d;
-    p = path[i];
-  }
-  return path.back();
-}
-
 class GoalDwa final : public LocalPlanner {
  public:
   GoalDwa(const NavigationParams& p, const RobotParams& r) : p_(p), r_(r) {}
@@ -150,6 +123,33 @@ class GoalDwa final : public LocalPlanner {
 };
 
 }  // namespace
+
+/** The point `lookahead` metres along the path after the point nearest to
+ *  (x, y); the last point when the path is shorter. */
+TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead) {
+  size_t seg = 0;
+  double best = std::numeric_limits<double>::infinity(), best_u = 0;
+  for (size_t i = 0; i + 1 < path.size(); ++i) {
+    const auto& a = path[i];
+    const auto& b = path[i + 1];
+    const double vx = b.x - a.x, vy = b.y - a.y, l2 = vx * vx + vy * vy;
+    const double u = l2 > 0 ? std::clamp(((x - a.x) * vx + (y - a.y) * vy) / l2, 0.0, 1.0) : 0;
+    const double d = std::hypot(a.x + u * vx - x, a.y + u * vy - y);
+    if (d < best) best = d, seg = i, best_u = u;
+  }
+  double left = lookahead;
+  TPoint2D p{path[seg].x + best_u * (path[seg + 1].x - path[seg].x),
+             path[seg].y + best_u * (path[seg + 1].y - path[seg].y)};
+  for (size_t i = seg + 1; i < path.size(); ++i) {
+    const double d = std::hypot(path[i].x - p.x, path[i].y - p.y);
+    if (d >= left) {
+      return {p.x + (path[i].x - p.x) * left / d, p.y + (path[i].y - p.y) * left / d};
+    }
+    left -= d;
+    p = path[i];
+  }
+  return path.back();
+}
 
 std::unique_ptr<LocalPlanner> makeGoalDwa(const NavigationParams& p, const RobotParams& r) {
   return std::make_unique<GoalDwa>(p, r);

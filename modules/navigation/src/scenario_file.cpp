@@ -139,6 +139,10 @@ Scenario parseScenario(const std::string& text, const std::string& origin,
                      ": give exactly one of 'goal' (goal navigation) and "
                      "'intent'/'intent_heading' (a user pushing a walker)");
   if (const Node* n = root.find("heading_gain")) s.heading_gain = r.number(*n, "heading_gain");
+  if (const Node* n = root.find("user_speed")) {
+    s.user_speed = r.number(*n, "user_speed");
+    if (s.user_speed <= 0 || s.user_speed > 2) r.fail(*n, "user_speed must be in (0, 2] m/s");
+  }
   if (const Node* n = root.find("duration")) {
     s.duration = r.number(*n, "duration");
     if (s.duration <= 0 || s.duration > 3600) r.fail(*n, "duration must be in (0, 3600] s");

@@ -162,9 +162,10 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     goal_label = g.room + (g.place.empty() ? "" : "/" + g.place);
   }
   const bool goal_mode = goal.has_value();
-  if (walker && goal_mode)
-    throw InputError(sc.file + ": plugin " + nav.plugin +
-                     " follows a user's command; this scenario has a goal (use goal-dwa)");
+  // A walker with a goal: the scripted user walks there along the route (a
+  // user who knows the way), steering at heading_gain towards the point
+  // `lookahead` ahead on it, at user_speed; the walker keeps them safe.
+  const bool user_walks_route = walker && goal_mode;
   if (!walker && !goal_mode)
     throw InputError(sc.file + ": plugin " + nav.plugin +
                      " drives to a goal; this scenario scripts a user (use user-intent-dwa)");
@@ -265,7 +266,24 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     const double t = sim.time();
     const sim::Pose2 truth = sim.groundTruth();
     std::optional<Twist> user;
-    if (walker) {
+    if (user_walks_route) {
+      if (std::hypot(truth.x - goal->x, truth.y - goal->y) < nav.goal_tolerance) {
+        goal_reached = true;
+        t_end = t;
+        break;
+      }
+      if (route) {
+        const auto pts = withStart({sc.start.x, sc.start.y}, route->waypoints);
+        const TPoint2D la = lookaheadPoint(pts, truth.x, truth.y, nav.lookahead);
+        const double err =
+            std::remainder(std::atan2(la.y - truth.y, la.x - truth.x) - truth.yaw, 2 * M_PI);
+        // A person turns on the spot before walking off in a new direction.
+        const double v = std::abs(err) > M_PI / 3 ? 0.0 : sc.user_speed;
+        user = Twist{v, std::clamp(sc.heading_gain * err, -robot.w_max, robot.w_max)};
+        navigator.setUserIntent(*user, t);
+        user_path.push_back({truth.x, truth.y});
+      }
+    } else if (walker) {
       if (const auto u = sc.userAt(t, truth.yaw)) {
         user = Twist{u->first, u->second};
         navigator.setUserIntent(*user, t);
@@ -330,7 +348,8 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     // Replan every 2 s from the localised pose with the obstacles the robot
     // has seen marked on the map (boxes and people the map does not show);
     // when that finds no route, the last one stays.
-    if (goal_mode && gp && k > 0 && k % static_cast<size_t>(2 * o.control_rate) == 0) {
+    if (goal_mode && !user_walks_route && gp && k > 0 &&
+        k % static_cast<size_t>(2 * o.control_rate) == 0) {
       const TPose2D mp = navigator.mapPose();
       mrpt::maps::COccupancyGridMap2D seen = world->grid();
       for (const auto& q : navigator.obstaclesInMap())

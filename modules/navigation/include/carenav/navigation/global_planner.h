@@ -16,12 +16,12 @@ namespace carenav::navigation {
 using mrpt::math::TPoint2D;
 
 struct Route {
-  std::vector<TPoint2D> cells;      ///< centres of the cells of the A* path, start to goal
+  std::vector<TPoint2D> cells;  ///< centres of the cells of the A* path, start to goal
   /** Corners (line-of-sight simplification) and, at each narrow passage,
    *  a point before it, its centre and a point after it on the axis across
    *  it; ending at the goal. */
   std::vector<TPoint2D> waypoints;
-  double length = 0;                ///< m, along the waypoints
+  double length = 0;  ///< m, along the waypoints
 };
 
 /** A* over the cells of a static occupancy grid. A cell is passable when it

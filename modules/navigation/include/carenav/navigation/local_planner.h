@@ -120,6 +120,10 @@ class PlannerRegistry {
   std::map<std::string, std::pair<std::string, PlannerFactory>> entries_;
 };
 
+/** The point `lookahead` metres along the polyline after the point of it
+ *  nearest to (x, y); its last point when the rest is shorter. */
+TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead);
+
 /** Seed 000's shared control for a walker (Alg. 4, Eq. 4.10). */
 std::unique_ptr<LocalPlanner> makeUserIntentDwa(const NavigationParams& p, const RobotParams& r);
 /** Goal-directed DWA: heading to the next waypoint, clearance, speed,

@@ -51,7 +51,7 @@ struct NavigationParams {
   double plan_cost_weight = 2;  ///< extra route cost per metre near obstacles (keeps paths central)
   double passage_margin = 0.25;   ///< m, route cells closer than radius + this are a narrow passage
   double passage_approach = 0.6;  ///< m, waypoints before and after a passage, on its axis
-  double goal_tolerance = 0.5;  ///< m, goal reached (seed 002)
+  double goal_tolerance = 0.5;    ///< m, goal reached (seed 002)
   double goal_tolerance_deg = 3;  ///< deg, heading at the goal (seed 002: 0.05 rad)
   // Safety supervisor
   double sensor_timeout = 0.5;    ///< s, stop when the newest scan is older

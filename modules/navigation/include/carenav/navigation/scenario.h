@@ -39,7 +39,10 @@ struct Scenario {
   std::string places;               ///< places file for goal_name (default: WORLD.places.yaml)
   std::vector<IntentEntry> intent;  ///< walker scenario
   double heading_gain = 1.5;        ///< rad/s per rad of heading error for heading intents
-  double duration = 60;             ///< s, simulated
+  /** m/s, a walker scenario with a goal: the scripted user walks the route
+   *  to it at this speed. */
+  double user_speed = 0.25;
+  double duration = 60;                              ///< s, simulated
   std::optional<std::pair<TPoint2D, double>> reach;  ///< success needs the centre within r
   std::vector<std::vector<TPoint2D>> forbidden;      ///< the centre must never enter these
   bool path_exists = true;  ///< goal scenarios: the world has a route to the goal
