@@ -33,14 +33,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-bool inPolygon(const std::vector<TPoint2D>& poly, double x, double y) {
-  bool in = false;
-  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
-    if ((poly[i].y > y) != (poly[j].y > y) &&
-        x < (poly[j].x - poly[i].x) * (y - poly[i].y) / (poly[j].y - poly[i].y) + poly[i].x)
-      in = !in;
-  return in;
-}
 
 /** Footprint clearance against the true world: walls, floor height changes
  *  (steps up or down, holes, stairs), table tops lower than the robot and
@@ -311,7 +303,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     clear_sum += cl;
     truth_path.push_back({truth.x, truth.y});
     for (const auto& poly : sc.forbidden)
-      if (inPolygon(poly, truth.x, truth.y)) m.entered_forbidden = true;
+      if (places::pointInPolygon(poly, truth.x, truth.y)) m.entered_forbidden = true;
     if (sc.reach &&
         std::hypot(truth.x - sc.reach->first.x, truth.y - sc.reach->first.y) <= sc.reach->second)
       reached = true;
