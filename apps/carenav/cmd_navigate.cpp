@@ -1,8 +1,18 @@
 // carenav navigate --scenario S.yaml | --suite DIR  [--profile P] [--plugin NAME[,NAME...]]
 //                  [--out DIR] [--json]
+// The live app: carenav navigate [--world W.yaml | --scenario S.yaml] --intent SRC | --goal G
+//                  [--speed F]    (the built-in simulator)
+//               carenav navigate --bridge HOST:PORT --profile P --intent SRC | --goal G --map M
+//                  --start x,y,deg   (a real robot)
 #include <carenav/common/errors.h>
+#include <carenav/common/profile.h>
+#include <carenav/navigation/bridge.h>
+#include <carenav/navigation/intent.h>
 #include <carenav/navigation/local_planner.h>
 #include <carenav/navigation/scenario.h>
+
+#include <csignal>
+#include <limits>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -30,7 +40,24 @@ struct NavigateArgs {
   std::vector<std::string> sets;
   bool json = false;
   double rate = 10;
+  // the live app
+  std::string world, start, intent, bridge, map;
+  std::optional<double> speed, duration;
+  double connect_timeout = 10;
 };
+
+std::atomic<bool> g_stop{false};
+void onSigint(int) { g_stop = true; }
+
+/** "x,y,deg" to a pose; throws InputError naming the option. */
+navigation::TPose2D parsePose(const std::string& s, const char* option) {
+  double x, y, deg;
+  char c1, c2, extra;
+  std::istringstream in(s);
+  if ((in >> x >> c1 >> y >> c2 >> deg) && c1 == ',' && c2 == ',' && !(in >> extra))
+    return navigation::TPose2D{x, y, mrpt::DEG2RAD(deg)};
+  throw InputError(std::string(option) + " '" + s + "': expected x,y,deg");
+}
 
 std::vector<std::string> splitComma(const std::string& s) {
   std::vector<std::string> out;
@@ -223,7 +250,135 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
   cmd->add_option("--rate", a->rate, "Control rate, Hz (default 10)")
       ->check(CLI::Range(1.0, 100.0));
   cmd->add_flag("--json", a->json, "Print the metrics of every run as JSON");
+  auto* live = cmd->add_option_group(
+      "live",
+      "The live app: a user (or a goal) drives the robot in the simulator or, through the "
+      "bridge, a real robot (docs/navigate.md)");
+  live->add_option("--intent", a->intent,
+                   "The walker's user: csv:FILE (timed t,v,w rows, or a navlog.csv to replay a "
+                   "run), keyboard (w/s a/d or arrows, space stop, q quit), joystick[:DEV] "
+                   "(default /dev/input/js0), tcp:[HOST:]PORT (lines 'v w')");
+  auto* world = live->add_option("--world", a->world,
+                                 "Simulator world YAML (docs/simulate.md); default "
+                                 "maps/worlds/apartment.yaml of the source tree");
+  live->add_option("--start", a->start,
+                   "Start pose x,y,deg (simulator, or on --map with --bridge)");
+  live->add_option("--speed", a->speed,
+                   "Simulated seconds per wall second: 1 real time (the live default), 0 as fast "
+                   "as possible (the scenario default)")
+      ->check(CLI::Range(0.0, 1000.0));
+  live->add_option("--duration", a->duration,
+                   "Seconds to run (default: the scenario's; live: "
+                   "until the intent source ends, q or Ctrl-C)")
+      ->check(CLI::Range(0.0, 1e6));
+  auto* bridge = live->add_option(
+      "--bridge", a->bridge,
+      "HOST:PORT of a real robot's bridge (line-based TCP: odom/scan/intent in, cmd out; "
+      "docs/navigate.md) instead of the simulator");
+  live->add_option("--connect-timeout", a->connect_timeout,
+                   "Seconds to keep trying to reach the bridge (default 10)")
+      ->check(CLI::Range(0.0, 3600.0));
+  live->add_option("--map", a->map,
+                   "Static map for goal navigation with --bridge (any map carenav reads)");
+  bridge->excludes(world);
+  bridge->excludes(su);
+  bridge->excludes(sc);
   cmd->callback([a, &g] {
+    auto report = [a, &g](const std::vector<navigation::RunMetrics>& runs) {
+      if (a->json) {
+        std::cout << "[\n";
+        for (size_t i = 0; i < runs.size(); ++i)
+          std::cout << runs[i].toJson() << (i + 1 < runs.size() ? ",\n" : "\n");
+        std::cout << "]\n";
+      } else {
+        std::printf("%-24s %-16s %-7s %5s %7s %7s %7s %7s %6s %8s %7s  %s\n", "scenario", "plugin",
+                    "success", "coll", "minclr", "meanclr", "time_s", "path_m", "v_mps", "fidelity",
+                    "cyc_ms", "outcome");
+        for (const auto& r : runs)
+          std::printf("%-24s %-16s %-7s %5zu %7s %7s %7s %7s %6s %8s %7s  %s\n", r.scenario.c_str(),
+                      r.plugin.c_str(), r.success ? "yes" : "NO", r.collisions,
+                      cell(r.min_clearance_m).c_str(), cell(r.mean_clearance_m).c_str(),
+                      cell(r.duration_s, 1).c_str(), cell(r.path_length_m).c_str(),
+                      cell(r.mean_speed_mps).c_str(), cell(r.intent_fidelity, 3).c_str(),
+                      cell(r.cycle_ms_mean, 2).c_str(), r.outcome.c_str());
+        size_t ok = 0;
+        for (const auto& r : runs) ok += r.success;
+        std::printf("%zu of %zu runs succeeded\n", ok, runs.size());
+      }
+      if (!g.quiet)
+        for (const auto& r : runs)
+          for (const auto& f : r.outputs) std::cerr << "[navigate] wrote " << f << "\n";
+    };
+    const auto plugins_live = splitComma(a->plugins);
+    if (plugins_live.size() > 1 && (!a->intent.empty() || !a->bridge.empty() || !a->world.empty()))
+      throw InputError("navigate: the live app runs one plugin at a time");
+    // Ctrl-C ends a live run cleanly: the robot stops, the outputs are written.
+    if (!a->intent.empty() || !a->bridge.empty() || !a->world.empty())
+      std::signal(SIGINT, onSigint);
+
+    if (!a->bridge.empty()) {
+      if (a->profile.empty()) throw InputError("--bridge: give the robot's --profile");
+      navigation::BridgeOptions b;
+      b.address = a->bridge;
+      b.profile = a->profile;
+      b.sets = a->sets;
+      b.plugin = plugins_live.empty() ? "" : plugins_live.front();
+      b.map = a->map;
+      if (!a->start.empty()) b.start = parsePose(a->start, "--start");
+      b.goal = a->goal;
+      b.control_rate = a->rate;
+      b.duration = a->duration.value_or(0);
+      b.connect_timeout = a->connect_timeout;
+      b.out_dir = a->out;
+      b.stop = &g_stop;
+      b.progress = !g.quiet;
+      if (!a->intent.empty()) {
+        Profile prof = Profile::load(a->profile);
+        prof.applyOverrides(a->sets);
+        b.intent = navigation::makeIntentSource(a->intent, prof.section<RobotParams>("robot"));
+      }
+      report({navigation::runBridge(b)});
+      return;
+    }
+    if (!a->map.empty())
+      throw InputError("--map goes with --bridge (a simulated world has its map)");
+    if (!a->intent.empty() || !a->world.empty()) {
+      // The live app in the built-in simulator.
+      navigation::Scenario s;
+      if (!a->scenario.empty()) {
+        s = navigation::readScenario(a->scenario);
+      } else {
+        s.name = "live";
+        s.file = "navigate";
+        s.world = !a->world.empty() ? a->world : CARENAV_DEFAULT_WORLD;
+        if (!fs::exists(s.world)) throw InputError(s.world + ": no such world file (--world)");
+        s.profile = CARENAV_DEFAULT_PROFILE;
+        s.start = parsePose(a->start.empty() ? "1.0,4.0,0" : a->start, "--start");
+        s.duration = std::numeric_limits<double>::infinity();
+      }
+      if (!a->start.empty()) s.start = parsePose(a->start, "--start");
+      s.intent.clear();
+      navigation::RunOptions o;
+      o.plugin = plugins_live.empty() ? "" : plugins_live.front();
+      o.profile = a->profile;
+      o.sets = a->sets;
+      o.goal = a->goal;
+      o.control_rate = a->rate;
+      o.progress = !g.quiet;
+      o.out_dir = a->out;
+      o.speed = a->speed.value_or(1.0);
+      o.duration = a->duration;
+      o.stop = &g_stop;
+      if (!a->intent.empty()) {
+        Profile prof = Profile::load(!a->profile.empty() ? a->profile : s.profile);
+        prof.applyOverrides(a->sets);
+        o.intent = navigation::makeIntentSource(a->intent, prof.section<RobotParams>("robot"));
+      } else if (!s.goal && a->goal.empty()) {
+        throw InputError("navigate: give --intent SRC (a walker's user) or --goal G");
+      }
+      report({navigation::runScenario(s, o)});
+      return;
+    }
     std::vector<std::string> files;
     if (!a->scenario.empty()) {
       files.push_back(a->scenario);
@@ -236,7 +391,9 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
       std::sort(files.begin(), files.end());
       if (files.empty()) throw InputError(a->suite + ": no *.yaml scenario in it");
     } else {
-      throw InputError("navigate: give --scenario FILE or --suite DIR");
+      throw InputError(
+          "navigate: give --scenario FILE or --suite DIR, or for the live app --intent SRC, "
+          "--world W.yaml or --bridge HOST:PORT (see --help)");
     }
     std::vector<navigation::Scenario> scenarios;
     for (const auto& f : files) scenarios.push_back(navigation::readScenario(f));
@@ -244,6 +401,8 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
     const bool single = scenarios.size() == 1 && plugins.size() <= 1;
 
     std::vector<navigation::RunMetrics> runs;
+    if (a->speed && *a->speed > 0 && !single)
+      throw InputError("navigate: --speed paces one run; a suite runs as fast as it can");
     for (const auto& s : scenarios) {
       std::vector<std::string> ps = plugins.empty() ? std::vector<std::string>{""} : plugins;
       for (const auto& p : ps) {
@@ -254,6 +413,8 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
         o.goal = a->goal;
         o.control_rate = a->rate;
         o.progress = !g.quiet;
+        o.speed = a->speed.value_or(0.0);
+        o.duration = a->duration;
         if (!a->out.empty())
           o.out_dir = (fs::path(a->out) / (s.name + (p.empty() ? "" : "-" + p))).string();
         try {
@@ -267,29 +428,7 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
         }
       }
     }
-    if (a->json) {
-      std::cout << "[\n";
-      for (size_t i = 0; i < runs.size(); ++i)
-        std::cout << runs[i].toJson() << (i + 1 < runs.size() ? ",\n" : "\n");
-      std::cout << "]\n";
-    } else {
-      std::printf("%-24s %-16s %-7s %5s %7s %7s %7s %7s %6s %8s %7s  %s\n", "scenario", "plugin",
-                  "success", "coll", "minclr", "meanclr", "time_s", "path_m", "v_mps", "fidelity",
-                  "cyc_ms", "outcome");
-      for (const auto& r : runs)
-        std::printf("%-24s %-16s %-7s %5zu %7s %7s %7s %7s %6s %8s %7s  %s\n", r.scenario.c_str(),
-                    r.plugin.c_str(), r.success ? "yes" : "NO", r.collisions,
-                    cell(r.min_clearance_m).c_str(), cell(r.mean_clearance_m).c_str(),
-                    cell(r.duration_s, 1).c_str(), cell(r.path_length_m).c_str(),
-                    cell(r.mean_speed_mps).c_str(), cell(r.intent_fidelity, 3).c_str(),
-                    cell(r.cycle_ms_mean, 2).c_str(), r.outcome.c_str());
-      size_t ok = 0;
-      for (const auto& r : runs) ok += r.success;
-      std::printf("%zu of %zu runs succeeded\n", ok, runs.size());
-    }
-    if (!g.quiet)
-      for (const auto& r : runs)
-        for (const auto& f : r.outputs) std::cerr << "[navigate] wrote " << f << "\n";
+    report(runs);
   });
 }
 

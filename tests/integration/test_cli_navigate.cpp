@@ -131,6 +131,18 @@ TEST(CliNavigate, GoalNavigationReachesTheGoalAndDoesNotForceAClosedDoor) {
   EXPECT_LT(jsonReal(run.json, "path_length_m").value_or(9), 0.1);
 }
 
+// The mrpt-ptg plugin (MRPT's TP-space reactive navigation) on the same
+// corridor: it reaches the goal past the unmapped boxes without a collision.
+TEST(CliNavigate, MrptPtgPluginReachesTheCorridorGoal) {
+  const NavRun run = navigate("goal-corridor-boxes.yaml", {"--plugin", "mrpt-ptg"});
+  ASSERT_EQ(run.r.code, 0) << run.r.err;
+  EXPECT_NE(run.json.find("\"plugin\": \"mrpt-ptg\""), std::string::npos) << run.json;
+  EXPECT_TRUE(jsonTrue(run.json, "success")) << run.json;
+  EXPECT_LT(jsonReal(run.json, "final_goal_error_m").value_or(9), 0.6);
+  EXPECT_EQ(jsonReal(run.json, "collisions"), 0.0);
+  EXPECT_GT(jsonReal(run.json, "path_length_m").value_or(0), 5.0);
+}
+
 // Goals by name (issue 7): a place of the places file beside the world.
 TEST(CliNavigate, GoalByPlaceName) {
   const auto dir = scratch() / "nav_places";
@@ -217,4 +229,70 @@ TEST(CliNavigate, BadScenarioFilesExitTwoWithTheLine) {
                      "teb"})
                 .code,
             2);
+}
+
+// ------------------------------------------------------------ the live app
+
+TEST(CliNavigateLive, ScriptedUserInAWorldAndItsLogReplaysTheRun) {
+  const auto d = scratch() / "live_csv";
+  fs::remove_all(d);
+  fs::create_directories(d);
+  // The user walks down the corridor, turns towards the wall and keeps pushing.
+  std::ofstream(d / "user.csv") << "t,v,w\n0,0.3,0\n6,0.3,0.6\n9,0.3,0\n16,0,0\n";
+  const std::string world = kSrc + "/maps/worlds/nav/corridor.yaml";
+  const RunResult r = carenav({"-q", "navigate", "--world", world, "--start", "1.0,1.5,0",
+                               "--intent", "csv:" + (d / "user.csv").string(), "--speed", "0",
+                               "--json", "--out", (d / "a").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(jsonNumber(r.out, "collisions"), 0u) << "pushed at the wall, it must not hit it";
+  EXPECT_GT(jsonReal(r.out, "path_length_m").value_or(0), 1.5) << "it followed the user first";
+  const auto a = readCsv(d / "a" / "navlog.csv");
+  ASSERT_GT(a.size(), 100u);
+  // Turned towards the wall and still pushed: the walker keeps its distance.
+  EXPECT_GT(jsonReal(r.out, "min_clearance_m").value_or(0), 0.0);
+  EXPECT_EQ(a[1][7], "0.300") << "the user's command is in the log";
+  // The log replays: the same user commands drive the same path.
+  const RunResult r2 = carenav({"-q", "navigate", "--world", world, "--start", "1.0,1.5,0",
+                                "--intent", "csv:" + (d / "a" / "navlog.csv").string(), "--speed",
+                                "0", "--json", "--out", (d / "b").string()});
+  ASSERT_EQ(r2.code, 0) << r2.err;
+  const auto b = readCsv(d / "b" / "navlog.csv");
+  ASSERT_GE(b.size(), a.size() - 1);
+  for (size_t i = 1; i + 1 < a.size(); ++i)
+    ASSERT_EQ(a[i][1] + "," + a[i][2], b[i][1] + "," + b[i][2]) << "row " << i;
+}
+
+TEST(CliNavigateLive, RealTimePaceAndTheScenarioWorld) {
+  const auto d = scratch() / "live_pace";
+  fs::create_directories(d);
+  std::ofstream(d / "user.csv") << "0,0.3,0\n2,0,0\n";
+  const RunResult r =
+      carenav({"-q", "navigate", "--scenario", kScenarios + "walker-corridor-free.yaml", "--intent",
+               "csv:" + (d / "user.csv").string(), "--speed", "1", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  // Paced at real time, 2 s of script cannot end sooner in wall time.
+  EXPECT_GE(jsonReal(r.out, "wall_seconds").value_or(0), 1.9);
+  EXPECT_GT(jsonReal(r.out, "path_length_m").value_or(0), 0.2);
+  EXPECT_TRUE(jsonTrue(r.out, "success")) << "a live user need not reach the scenario's target";
+}
+
+TEST(CliNavigateLive, BadIntentSourcesExitTwo) {
+  const auto d = scratch() / "live_bad";
+  fs::create_directories(d);
+  std::ofstream(d / "bad.csv") << "t,v,w\n0,0.3,0\n1,0.3\n";
+  const std::string world = kSrc + "/maps/worlds/nav/corridor.yaml";
+  RunResult r = carenav({"navigate", "--world", world, "--start", "1.0,1.5,0", "--intent",
+                         "csv:" + (d / "bad.csv").string(), "--speed", "0"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("bad.csv:3:"), std::string::npos) << r.err;
+  r = shell(quote(kBin) + " navigate --world " + quote(world) +
+            " --start 1.0,1.5,0 --intent keyboard --speed 0 </dev/null");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("not a terminal"), std::string::npos) << r.err;
+  r = carenav({"navigate", "--world", world, "--start", "0.1,0.1,0", "--intent",
+               "csv:" + (d / "bad.csv").string()});
+  EXPECT_EQ(r.code, 2) << "start on the wall, or the bad script: either is bad input";
+  r = carenav({"navigate", "--world", world, "--start", "1.0,1.5", "--intent", "keyboard"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("x,y,deg"), std::string::npos) << r.err;
 }

@@ -242,4 +242,21 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
   return r;
 }
 
+std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map,
+                                      const std::vector<TPoint2D>& seen, const TPoint2D& from,
+                                      const TPoint2D& goal, const std::optional<Route>& route,
+                                      double robot_radius, double skip, const NavigationParams& p) {
+  mrpt::maps::COccupancyGridMap2D marked = map;
+  for (const auto& q : seen)
+    if (q.x > marked.getXMin() && q.x < marked.getXMax() && q.y > marked.getYMin() &&
+        q.y < marked.getYMax())
+      marked.setPos(q.x, q.y, 0.0f);
+  const GlobalPlanner gp(marked, robot_radius, p);
+  std::vector<TPoint2D> ahead{from};
+  if (route) ahead.insert(ahead.end(), route->waypoints.begin(), route->waypoints.end());
+  const bool blocked = !route || !gp.polylineClear(ahead, skip);
+  if (blocked && gp.isFree(from.x, from.y) && gp.isFree(goal.x, goal.y)) return gp.plan(from, goal);
+  return std::nullopt;
+}
+
 }  // namespace carenav::navigation

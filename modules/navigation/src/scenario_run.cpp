@@ -26,13 +26,13 @@
 #include <iostream>
 #include <limits>
 #include <sstream>
+#include <thread>
 
 namespace carenav::navigation {
 
 namespace fs = std::filesystem;
 
 namespace {
-
 
 /** Footprint clearance against the true world: walls, floor height changes
  *  (steps up or down, holes, stairs), table tops lower than the robot and
@@ -158,6 +158,13 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   // user who knows the way), steering at heading_gain towards the point
   // `lookahead` ahead on it, at user_speed; the walker keeps them safe.
   const bool user_walks_route = walker && goal_mode;
+  if (o.intent && !walker)
+    throw InputError("--intent " + o.intent->describe() + ": plugin " + nav.plugin +
+                     " drives to a goal; a user's commands need a walker plugin "
+                     "(user-intent-dwa)");
+  if (o.intent && goal_mode)
+    throw InputError("--intent " + o.intent->describe() +
+                     ": the user drives the walker; give no goal with it");
   if (!walker && !goal_mode)
     throw InputError(sc.file + ": plugin " + nav.plugin +
                      " drives to a goal; this scenario scripts a user (use user-intent-dwa)");
@@ -197,7 +204,10 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   size_t fid_n = 0;
   m.min_clearance_m = std::numeric_limits<double>::infinity();
   bool reached = false, goal_reached = false;
-  double t_end = sc.duration;
+  const double duration = o.duration ? *o.duration : sc.duration;
+  double t_end = duration;
+  std::optional<InputError> input_error;  // a live source's bad message: outputs first
+  bool intent_over = false;
   std::ofstream log;
   if (!o.out_dir.empty()) {
     fs::create_directories(o.out_dir);
@@ -209,8 +219,17 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   const bool tty = o.progress && isatty(fileno(stderr));
   const auto& odo0 = sim.odometry();
   navigator.setOdometry({odo0.x, odo0.y, odo0.yaw}, {0, 0}, 0);
-  size_t steps = static_cast<size_t>(std::ceil(sc.duration / dt - 1e-9));
+  const size_t steps = std::isfinite(duration)
+                           ? static_cast<size_t>(std::ceil(duration / dt - 1e-9))
+                           : std::numeric_limits<size_t>::max();
   for (size_t k = 0; k < steps; ++k) {
+    if (o.stop && o.stop->load()) break;
+    if (o.speed > 0) {
+      // Live pace: simulated time runs `speed` times the wall clock.
+      const auto due = wall0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                   std::chrono::duration<double>(sim.time() / o.speed));
+      std::this_thread::sleep_until(due);
+    }
     // Sensors and odometry of the last period.
     for (const auto& f : sim.step(dt)) {
       const TPose2D odo{f.odometry.x, f.odometry.y, f.odometry.yaw};
@@ -275,6 +294,32 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
         navigator.setUserIntent(*user, t);
         user_path.push_back({truth.x, truth.y});
       }
+    } else if (o.intent) {
+      std::optional<IntentSample> s;
+      try {
+        s = o.intent->poll(t);
+      } catch (const InputError& e) {
+        input_error = e;
+        sim.setCommand(0, 0);
+        break;
+      }
+      if (s) {
+        navigator.setUserIntent(s->cmd, s->t);
+        if (t - s->t <= nav.intent_timeout) {
+          user = s->cmd;
+          user_pose = integrateArc(user_pose, s->cmd.v,
+                                   std::clamp(s->cmd.w, -robot.w_max, robot.w_max), dt);
+          user_path.push_back({user_pose.x, user_pose.y});
+        }
+      }
+      // The source has ended (script over, q pressed): stop once the walker stands.
+      if (o.intent->finished(t)) {
+        if (intent_over && std::abs(sim.v()) < 1e-3 && std::abs(sim.w()) < 1e-3) {
+          t_end = t;
+          break;
+        }
+        intent_over = true;
+      }
     } else if (walker) {
       if (const auto u = sc.userAt(t, truth.yaw)) {
         user = Twist{u->first, u->second};
@@ -328,10 +373,16 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
           << ",\"" << cyc.decision.reason << "\"," << fmt(cl) << "," << cyc.obstacles << ",\""
           << cyc.plan.note << "\"\n";
     }
-    if (tty && k % 20 == 0)
-      std::cerr << "\r[navigate] " << sc.name << " t " << fmt(t, 1) << " / " << sc.duration
-                << " s, clearance " << fmt(cl, 2) << " m, " << sim.collisions() << " collisions   "
-                << std::flush;
+    if (tty && k % (o.speed > 0 ? 2 : 20) == 0) {
+      // The status line.
+      std::cerr << "\r[navigate] " << sc.name << " t " << fmt(t, 1);
+      if (std::isfinite(duration)) std::cerr << " / " << fmt(duration, 0);
+      std::cerr << " s";
+      if (user) std::cerr << ", user " << fmt(user->v, 2) << " m/s " << fmt(user->w, 2) << " rad/s";
+      std::cerr << ", cmd " << fmt(cyc.decision.cmd.v, 2) << " " << fmt(cyc.decision.cmd.w, 2)
+                << " " << safetyActionName(cyc.decision.action) << ", clearance " << fmt(cl, 2)
+                << " m, " << sim.collisions() << " collisions   " << std::flush;
+    }
     if (goal_mode && cyc.goal_reached) {
       goal_reached = true;
       t_end = t;
@@ -343,28 +394,18 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     if (goal_mode && !user_walks_route && gp && k > 0 &&
         k % static_cast<size_t>(2 * o.control_rate) == 0) {
       const TPose2D mp = navigator.mapPose();
-      mrpt::maps::COccupancyGridMap2D seen = world->grid();
-      for (const auto& q : navigator.obstaclesInMap())
-        if (q.x > seen.getXMin() && q.x < seen.getXMax() && q.y > seen.getYMin() &&
-            q.y < seen.getYMax())
-          seen.setPos(q.x, q.y, 0.0f);
-      const GlobalPlanner gp2(seen, fp.inscribed, nav);
-      // Keep the route while it is clear of what the robot has seen (a
-      // route that flips between two equal detours makes the robot dither).
-      std::vector<TPoint2D> ahead{{mp.x, mp.y}};
-      if (route) ahead.insert(ahead.end(), route->waypoints.begin(), route->waypoints.end());
-      const bool blocked = !route || !gp2.polylineClear(ahead, fp.circumscribed + 0.2);
-      if (blocked && gp2.isFree(mp.x, mp.y) && gp2.isFree(goal->x, goal->y))
-        if (auto r2 = gp2.plan({mp.x, mp.y}, {goal->x, goal->y})) {
-          route = r2;
-          navigator.setRoute(withStart({mp.x, mp.y}, route->waypoints), *goal);
-        }
+      if (auto r2 = replanAroundSeen(world->grid(), navigator.obstaclesInMap(), {mp.x, mp.y},
+                                     {goal->x, goal->y}, route, fp.inscribed,
+                                     fp.circumscribed + 0.2, nav)) {
+        route = r2;
+        navigator.setRoute(withStart({mp.x, mp.y}, route->waypoints), *goal);
+      }
     }
   }
   if (tty) std::cerr << "\n";
   m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   m.collisions = sim.collisions();
-  m.duration_s = goal_reached ? t_end : sim.time();
+  m.duration_s = goal_reached || intent_over ? t_end : sim.time();
   m.path_length_m = sim.distance();
   m.mean_speed_mps = m.duration_s > 0 ? m.path_length_m / m.duration_s : 0;
   m.mean_clearance_m = m.cycles ? clear_sum / m.cycles : 0;
@@ -383,14 +424,14 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   else if (goal_mode && !route)
     m.outcome = sc.path_exists ? "no route to the goal" : "no route (as expected)";
   else if (goal_mode && !goal_reached)
-    m.outcome = "goal not reached in " + fmt(sc.duration, 0) + " s";
-  else if (sc.reach && !reached)
+    m.outcome = "goal not reached in " + fmt(duration, 0) + " s";
+  else if (sc.reach && !o.intent && !reached)
     m.outcome = "did not reach the target region";
   else
     m.outcome = goal_mode ? "goal reached" : "ok";
   m.success = m.collisions == 0 && !m.entered_forbidden &&
               (goal_mode ? (goal_reached || (!route && !sc.path_exists)) : true) &&
-              (!sc.reach || reached);
+              (!sc.reach || o.intent || reached);  // a live user goes where they like
 
   if (!o.out_dir.empty()) {
     io::RenderOptions ro;
@@ -433,6 +474,10 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     const std::string js = (fs::path(o.out_dir) / "summary.json").string();
     std::ofstream(js) << m.toJson() << "\n";
     m.outputs.push_back(js);
+  }
+  if (input_error) {
+    for (const auto& f : m.outputs) std::cerr << "[navigate] wrote " << f << "\n";
+    throw *input_error;
   }
   return m;
 }

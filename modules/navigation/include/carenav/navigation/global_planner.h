@@ -56,4 +56,15 @@ class GlobalPlanner {
   std::vector<float> dist_;  // m to the nearest non-free cell
 };
 
+/** Replanning with what the robot has seen: marks `seen` obstacles (map
+ *  frame) on a copy of `map` and, when the route ahead of `from` is no
+ *  longer clear of them (beyond `skip` metres), plans a new one from `from`
+ *  to `goal`. nullopt: keep the current route (still clear, or no new one
+ *  found: a route that flips between two equal detours makes the robot
+ *  dither). */
+std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map,
+                                      const std::vector<TPoint2D>& seen, const TPoint2D& from,
+                                      const TPoint2D& goal, const std::optional<Route>& route,
+                                      double robot_radius, double skip, const NavigationParams& p);
+
 }  // namespace carenav::navigation

@@ -3,11 +3,14 @@
 #pragma once
 
 #include <carenav/common/robot.h>
+#include <carenav/navigation/intent.h>
 #include <carenav/navigation/navigation_params.h>
 
 #include <mrpt/math/TPoint2D.h>
 #include <mrpt/math/TPose2D.h>
 
+#include <atomic>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -92,6 +95,18 @@ struct RunOptions {
   std::string goal;
   double control_rate = 10;  ///< Hz
   bool progress = false;
+  /** The live app: the user's commands come from this source (keyboard,
+   *  joystick, TCP, a CSV script) instead of the scenario's script; the run
+   *  ends when the source is finished and the walker has stopped. */
+  std::shared_ptr<IntentSource> intent;
+  /** Pace: simulated seconds per wall second (1: real time); 0 runs as
+   *  fast as the computer can. */
+  double speed = 0;
+  /** Overrides the scenario's duration (s); infinity runs until the intent
+   *  source finishes or `stop` is set. */
+  std::optional<double> duration;
+  /** Set (e.g. by SIGINT) to end the run early; outputs are still written. */
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /** Runs the scenario in the simulator: the profile's robot and sensors, its

@@ -1,0 +1,80 @@
+// The robot bridge: `carenav navigate --bridge HOST:PORT` drives a real
+// robot through a line-based TCP protocol (docs/navigate.md, "Robot
+// bridge"). The robot side (a small program on the robot, or a ROS node)
+// listens; carenav connects, reads odometry, scans and the user's command,
+// and answers every control cycle with a velocity command.
+//
+// Robot -> carenav, one message per line, numbers in SI units:
+//   odom T X Y YAW V W         pose in the odometry frame (m, rad) and the
+//                              measured velocity (m/s, rad/s) at robot time T (s)
+//   scan T LABEL N R1 .. RN    ranges of the profile's [sensor.LABEL]: a
+//                              lidar2d's N beams or a range-array's N
+//                              segments, spread evenly over its fov, right
+//                              to left; 0, nan, inf or beyond range_max:
+//                              no return
+//   intent T V W               the user's command (a walker's handle)
+//   bye                        end of the session
+//   (empty lines and lines starting with '#' are ignored)
+// carenav -> robot:
+//   hello carenav 1 PROFILE PLUGIN   once, on connecting
+//   cmd T V W                  every control cycle; T is the newest robot
+//                              time carenav has seen
+//   stop REASON                once, when carenav ends (after a last "cmd T 0 0")
+// The robot must stop by itself when no "cmd" arrives for a few cycles.
+#pragma once
+
+#include <carenav/navigation/intent.h>
+#include <carenav/navigation/local_planner.h>
+#include <carenav/navigation/scenario.h>
+
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace carenav::navigation {
+
+struct BridgeMessage {
+  enum class Kind { Odom, Scan, Intent, Bye } kind = Kind::Bye;
+  double t = 0;
+  TPose2D pose;               ///< odom
+  Twist vel;                  ///< odom: measured; intent: the user's
+  std::string label;          ///< scan
+  std::vector<float> ranges;  ///< scan
+};
+
+/** Parses one robot -> carenav line; nullopt for empty and comment lines.
+ *  Throws std::invalid_argument saying what is wrong. */
+std::optional<BridgeMessage> parseBridgeLine(const std::string& line);
+/** "cmd T V W". */
+std::string formatCommand(double t, const Twist& c);
+
+struct BridgeOptions {
+  std::string address;            ///< HOST:PORT of the robot's bridge
+  std::string profile;            ///< robot profile
+  std::vector<std::string> sets;  ///< profile overrides
+  std::string plugin;             ///< local method (default: the profile's)
+  /** Goal navigation: the static map, the start pose on it and the goal
+   *  ("x,y,deg" or a place of MAP's places file). */
+  std::string map;
+  std::optional<TPose2D> start;
+  std::string goal;
+  /** The walker's user; without it, the bridge's "intent" lines. */
+  std::shared_ptr<IntentSource> intent;
+  double control_rate = 10;  ///< Hz, real time
+  double duration = 0;       ///< s; 0: until "bye", the source ends or `stop`
+  double connect_timeout = 10;
+  std::string out_dir;  ///< run.png, navlog.csv, summary.json; empty: none
+  const std::atomic<bool>* stop = nullptr;
+  bool progress = false;
+};
+
+/** Runs the navigation loop against the bridge in real time. Returns the
+ *  run's metrics (clearance from the robot's own sensors; collisions are
+ *  not known). Throws InputError for a bad profile, map or goal, a robot
+ *  that cannot be reached, a malformed message (after commanding a stop
+ *  and writing the outputs) or a connection lost without "bye". */
+RunMetrics runBridge(const BridgeOptions& o);
+
+}  // namespace carenav::navigation
