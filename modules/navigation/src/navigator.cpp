@@ -131,6 +131,33 @@ void Navigator::clearRoute() {
   goal_.reset();
 }
 
+PlannerOutput Navigator::turnInPlace(const PlannerInput& in) const {
+  // Both turning directions at half the turn rate; the one whose swept
+  // footprint stays clear for a quarter turn (the wider clearance when both
+  // do) wins. Still turning: keep the direction (no dithering).
+  PlannerOutput out;
+  const double w = 0.5 * robot_.w_max;
+  const double quarter = (M_PI / 2) / w;
+  double best = -1;
+  for (const double sgn : {1.0, -1.0}) {
+    const Twist cmd{0, sgn * w};
+    const Trajectory tr =
+        rollout(*in.map, in.pose, cmd, quarter, p_.sim_step, p_.clearance_influence);
+    ++out.evaluated;
+    if (!tr.admissible()) continue;
+    ++out.admissible;
+    const bool same = in.current.w * sgn > 0.05;
+    const double score = tr.clearance + (same ? 1.0 : 0.0);
+    if (score > best) {
+      best = score;
+      out.cmd = cmd;
+      out.ok = true;
+    }
+  }
+  out.note = out.ok ? "turn in place to relocalise" : "cannot turn in place to relocalise";
+  return out;
+}
+
 Navigator::Cycle Navigator::cycle(double now) {
   Cycle c;
   memory_.prune(now, {odom_.x, odom_.y});
@@ -150,8 +177,12 @@ Navigator::Cycle Navigator::cycle(double now) {
     for (const auto& w : route_) in.path.push_back(mapToOdom(w));
     in.goal = mapToOdom(*goal_);
   }
-  c.plan = planner_->plan(in);
-  c.goal_reached = goal_ && c.plan.ok && c.plan.note == "goal reached";
+  if (rotate_request_ && !planner_->needsUserIntent()) {
+    c.plan = turnInPlace(in);
+  } else {
+    c.plan = planner_->plan(in);
+    c.goal_reached = goal_ && c.plan.ok && c.plan.note == "goal reached";
+  }
 
   SafetyInput s;
   s.now = now;

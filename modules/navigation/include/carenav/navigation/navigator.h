@@ -46,6 +46,14 @@ class Navigator {
    *  sensor data. */
   void setPerceivedObstacles(std::vector<TPoint2D> points, double t);
 
+  /** Localisation asks the robot to turn in place to relocalise (HOBBIT,
+   *  seed 004; localization::Localizer::needsRotateInPlace). While set, a
+   *  goal robot's cycle turns on the spot, towards the side where the
+   *  footprint can turn freely, instead of following the route; a walker
+   *  (its user drives) ignores it. */
+  void setRotateRequest(bool on) { rotate_request_ = on; }
+  bool rotateRequested() const { return rotate_request_; }
+
   /** Goal navigation: a route (map frame) ending at the goal. */
   void setRoute(const std::vector<TPoint2D>& waypoints, const TPose2D& goal);
   void clearRoute();
@@ -72,6 +80,7 @@ class Navigator {
   std::vector<TPoint2D> obstaclesInMap() const;
 
  private:
+  PlannerOutput turnInPlace(const PlannerInput& in) const;
   TPoint2D mapToOdom(const TPoint2D& p) const;
   TPose2D mapToOdom(const TPose2D& p) const;
 
@@ -91,6 +100,7 @@ class Navigator {
   std::vector<TPoint2D> perceived_;
   std::vector<TPoint2D> route_;
   std::optional<TPose2D> goal_;
+  bool rotate_request_ = false;
 };
 
 }  // namespace carenav::navigation
