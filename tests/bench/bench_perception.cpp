@@ -20,8 +20,10 @@ const Cloud& frame() {
   return c;
 }
 
-void runMethod(benchmark::State& st, Method m, bool scans) {
-  Pipeline pipe(PerceptionParams{}, m);
+void runMethod(benchmark::State& st, Method m, bool scans, double noise = 0) {
+  PerceptionParams p;
+  p.depth_noise_std = noise;  // > 0: the noise-aware voxel rules (same work, other thresholds)
+  Pipeline pipe(p, m);
   FrameInput in;
   in.cloud = &frame();
   in.sensor_origin = {0.2f, 0.f, 0.9f};
@@ -32,6 +34,9 @@ void runMethod(benchmark::State& st, Method m, bool scans) {
 static void BM_Frame_RrtGpd(benchmark::State& s) { runMethod(s, Method::RrtGpd, false); }
 static void BM_Frame_Ransac(benchmark::State& s) { runMethod(s, Method::Ransac, false); }
 static void BM_Frame_HeightBand(benchmark::State& s) { runMethod(s, Method::HeightBand, false); }
+static void BM_Frame_RrtGpdNoiseModel(benchmark::State& s) {
+  runMethod(s, Method::RrtGpd, false, 0.005);  // ini/isr-aiwalker.ini's depth_noise_std
+}
 static void BM_Frame_RrtGpdWithScans(benchmark::State& s) { runMethod(s, Method::RrtGpd, true); }
 
 static void BM_ElevationGrid(benchmark::State& st) {
@@ -72,6 +77,7 @@ static void BM_MaxRule(benchmark::State& st) {
 BENCHMARK(BM_Frame_RrtGpd)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Frame_Ransac)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Frame_HeightBand)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Frame_RrtGpdNoiseModel)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Frame_RrtGpdWithScans)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ElevationGrid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GroundPlane_RrtGpd)->Unit(benchmark::kMillisecond);

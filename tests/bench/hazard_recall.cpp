@@ -20,7 +20,10 @@
 //
 //   hazard_recall [--profile ini/isr-aiwalker.ini] [--worlds maps/worlds/hazards]
 //                 [--frames 1] [--seed 1] [--margin 0.2] [--set section.key=value]...
-// Writes a Markdown table on stdout.
+//                 [--dump SCENE]
+// Writes Markdown tables on stdout (the second: false obstacles per 0.5 m of
+// distance ahead); --dump prints the rrt-gpd grid and voxel classes of SCENE
+// as text on stderr (HAZARD_DUMP_CELLS=1: the obstacle voxels' statistics).
 #include <carenav/common/profile.h>
 #include <carenav/common/robot.h>
 #include <carenav/perception/pipeline.h>
@@ -60,9 +63,11 @@ constexpr double kRoiX0 = 1.1, kRoiX1 = 4.5, kRoiY0 = 0.5, kRoiY1 = 4.5;
 
 enum class Label : uint8_t { Outside, Floor, Hazard, Traversable, Margin };
 
+constexpr int kBands = 7;  // 0.5 m range bands from 1.0 m to 4.5 m ahead (robot frame x)
 struct Score {
   size_t hazard = 0, hazard_occ = 0, rows = 0, rows_blocked = 0;
   size_t floor = 0, floor_occ = 0, trav = 0, trav_occ = 0;
+  size_t band_n[kBands] = {}, band_occ[kBands] = {};  // floor + traversable cells by range
   std::string plane_source;
   double tilt_deg = 0;
 };
@@ -121,6 +126,13 @@ Score score(const LocalOccupancy& g, const std::vector<Label>& lab, const std::v
       const bool occ = g.prob(i, j) > occ_thr;
       if (lab[k] == Label::Hazard && first < 0) first = i;
       if (!seen[k]) continue;
+      if (lab[k] == Label::Floor || lab[k] == Label::Traversable) {
+        const int b = static_cast<int>(std::floor((g.centreX(i) - kRobotX - 1.0) / 0.5));
+        if (b >= 0 && b < kBands) {
+          ++s.band_n[b];
+          s.band_occ[b] += occ;
+        }
+      }
       switch (lab[k]) {
         case Label::Hazard:
           ++s.hazard;
@@ -160,6 +172,7 @@ int main(int argc, char** argv) try {
   int frames = 1;
   long seed = 1;
   double margin = 0.2;
+  std::string dump;  // scene whose rrt-gpd grid and voxel classes are printed as text
   std::vector<std::string> sets = {"sim.depth_decimation=1"};
   for (int a = 1; a < argc; ++a) {
     const std::string k = argv[a];
@@ -177,11 +190,13 @@ int main(int argc, char** argv) try {
       seed = std::stol(val());
     else if (k == "--margin")
       margin = std::stod(val());
+    else if (k == "--dump")
+      dump = val();
     else if (k == "--set")
       sets.push_back(val());
     else {
       std::cerr << "usage: hazard_recall [--profile P] [--worlds DIR] [--frames N] [--seed S] "
-                   "[--margin M] [--set section.key=value]...\n";
+                   "[--margin M] [--set section.key=value]... [--dump SCENE]\n";
       return k == "--help" || k == "-h" ? 0 : 2;
     }
   }
@@ -200,6 +215,7 @@ int main(int argc, char** argv) try {
   if (cams.empty()) throw std::runtime_error(profile_path + ": no depth-camera sensor");
   cams.resize(1);
 
+  std::vector<std::string> band_rows;
   std::printf(
       "| scene | method | plane | hazard cells seen | recall | rows blocked | "
       "floor cells seen | false obstacles (floor) | false obstacles (ramp) |\n");
@@ -240,6 +256,37 @@ int main(int argc, char** argv) try {
         }
       }
       const auto lab = groundTruth(*world, pipe.grid(), sc.traversable, margin);
+      if (dump == sc.name && meth == Method::RrtGpd) {
+        // Rows: x ahead from 4.5 m down to 0.6 m; columns: y from +1 m (left) to -1 m.
+        // Grid: '#' occupied, '.' free, ' ' unknown, upper case on hazard cells (H, F, U).
+        // Voxels: 'o' obstacle, 'g' ground, ' ' none.
+        const auto& g = pipe.grid();
+        const auto& e = pipe.elevation();
+        for (double x = 4.5; x > 0.6; x -= g.resolution()) {
+          std::string a, b;
+          for (double y = 1.0; y > -1.0; y -= g.resolution()) {
+            const int i = g.cellX(kRobotX + x), j = g.cellY(kRobotY + y);
+            const double pr = g.prob(i, j);
+            const bool hz = lab[static_cast<size_t>(i) * g.cells() + j] == Label::Hazard;
+            a += pr > pp.occupied_threshold ? (hz ? 'H' : '#')
+                 : pr < pp.free_threshold   ? (hz ? 'F' : '.')
+                                            : (hz ? 'U' : ' ');
+            const int ei = e.cellOf(x), ej = e.cellOf(y);
+            const auto vc = e.inside(ei, ej)
+                                ? last.voxel_classes[static_cast<size_t>(ei) * e.cells() + ej]
+                                : VoxelClass::None;
+            b += vc == VoxelClass::Obstacle ? 'o' : vc == VoxelClass::Ground ? 'g' : ' ';
+            if (vc == VoxelClass::Obstacle && std::getenv("HAZARD_DUMP_CELLS")) {
+              const auto& c = e.at(ei, ej);
+              std::fprintf(
+                  stderr, "  cell x %.2f y %.2f n %u lo %.4f mean %.4f hi %.4f plane %.4f\n", x, y,
+                  c.n, c.z_lo, c.mean, c.z_hi,
+                  last.plane ? last.plane->zAt(e.centre(ei), e.centre(ej)).value_or(0) : 0.0);
+            }
+          }
+          std::fprintf(stderr, "%5.2f |%s|  |%s|\n", x, a.c_str(), b.c_str());
+        }
+      }
       const Score s = score(pipe.grid(), lab, seen, pp.occupied_threshold);
       char plane[64] = "-";
       if (last.plane)
@@ -250,8 +297,21 @@ int main(int argc, char** argv) try {
                   pct(s.rows_blocked, s.rows).c_str(), s.floor, pct(s.floor_occ, s.floor).c_str(),
                   pct(s.trav_occ, s.trav).c_str());
       std::fflush(stdout);
+      if (meth == Method::RrtGpd || meth == Method::Ransac) {
+        std::string row = std::string("| ") + sc.name + " | " + methodName(meth) + " |";
+        for (int b = 0; b < kBands; ++b) row += " " + pct(s.band_occ[b], s.band_n[b]) + " |";
+        band_rows.push_back(row);
+      }
     }
   }
+  std::printf(
+      "\nFalse obstacles on traversable cells (plain floor beyond the margin, ramp and landing) "
+      "by distance ahead of the robot:\n\n| scene | method |");
+  for (int b = 0; b < kBands; ++b) std::printf(" %.1f-%.1f m |", 1.0 + 0.5 * b, 1.5 + 0.5 * b);
+  std::printf("\n|---|---|");
+  for (int b = 0; b < kBands; ++b) std::printf("---|");
+  std::printf("\n");
+  for (const auto& r : band_rows) std::printf("%s\n", r.c_str());
   return 0;
 } catch (const std::exception& e) {
   std::cerr << "hazard_recall: " << e.what() << "\n";

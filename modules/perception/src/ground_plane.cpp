@@ -78,8 +78,8 @@ RansacResult ransacPlane(const std::vector<Eigen::Vector3d>& pts, int iterations
 
 std::optional<Plane> localPlane(const ElevationGrid& g, double x, double y, int s) {
   const int ci = g.cellOf(x), cj = g.cellOf(y), h = s / 2;
-  std::vector<Eigen::Vector3d> pts;
-  pts.reserve(static_cast<size_t>(s) * s);
+  thread_local std::vector<Eigen::Vector3d> pts;  // reused: no allocation per call
+  pts.clear();
   for (int i = ci - h; i <= ci + h; ++i)
     for (int j = cj - h; j <= cj + h; ++j) {
       if (!g.inside(i, j)) continue;
@@ -116,18 +116,29 @@ class NodeIndex {
     for (int r = 0; r < n_; ++r) {
       // Every node in ring r is at least (r - 1) * b_ away.
       if (best >= 0 && (r - 1) * b_ > std::sqrt(bd)) break;
-      for (int i = bx - r; i <= bx + r; ++i)
-        for (int j = by - r; j <= by + r; ++j) {
-          if (std::max(std::abs(i - bx), std::abs(j - by)) != r) continue;
-          if (i < 0 || j < 0 || i >= n_ || j >= n_) continue;
-          for (int id : buckets_[key(i, j)]) {
-            const double d = sq(xs_[id] - x) + sq(ys_[id] - y);
-            if (d < bd || (d == bd && id < best)) {
-              bd = d;
-              best = id;
-            }
+      // Only the ring's perimeter (ties go to the smaller id: order-free).
+      auto visit = [&](int i, int j) {
+        if (i < 0 || j < 0 || i >= n_ || j >= n_) return;
+        for (int id : buckets_[key(i, j)]) {
+          const double d = sq(xs_[id] - x) + sq(ys_[id] - y);
+          if (d < bd || (d == bd && id < best)) {
+            bd = d;
+            best = id;
           }
         }
+      };
+      if (r == 0) {
+        visit(bx, by);
+        continue;
+      }
+      for (int k = -r; k <= r; ++k) {
+        visit(bx - r, by + k);
+        visit(bx + r, by + k);
+      }
+      for (int k = -r + 1; k <= r - 1; ++k) {
+        visit(bx + k, by - r);
+        visit(bx + k, by + r);
+      }
     }
     return best;
   }

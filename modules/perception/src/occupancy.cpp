@@ -85,17 +85,18 @@ double LocalOccupancy::prob(int i, int j) const {
 double LocalOccupancy::probAt(double x, double y) const { return prob(cellX(x), cellY(y)); }
 
 CellCounts LocalOccupancy::counts(double free_below, double occupied_above) const {
+  // p > t  <=>  log-odds > logit(t): no exp per cell.
+  const double lo = std::log(occupied_above / (1 - occupied_above));
+  const double lf = std::log(free_below / (1 - free_below));
   CellCounts c;
-  for (int i = 0; i < m_; ++i)
-    for (int j = 0; j < m_; ++j) {
-      const double p = prob(i, j);
-      if (p > occupied_above)
-        ++c.occupied;
-      else if (p < free_below)
-        ++c.free;
-      else
-        ++c.unknown;
-    }
+  for (const float l : logodds_) {
+    if (l > lo)
+      ++c.occupied;
+    else if (l < lf)
+      ++c.free;
+    else
+      ++c.unknown;
+  }
   return c;
 }
 
@@ -120,58 +121,267 @@ double voxelPlaneDistance(const ElevationCell& c, double x, double y, const Plan
   return std::max(pl.distance(x, y, c.z_hi), pl.distance(x, y, c.z_lo));
 }
 
-IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                      LocalOccupancy& grid, std::vector<VoxelClass>* classes) {
+double verticalNoise(const PerceptionParams& p, const Point3f* o, double x, double y, double z) {
+  if (!o || p.depth_noise_std <= 0) return 0.0;
+  const double dx = x - o->x, dy = y - o->y, dz = z - o->z;
+  const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
+  // sigma(r) = depth_noise_std r^2 along the ray (quadratic depth noise, the
+  // simulator's model and Khoshelham & Elberink's for structured light); its
+  // vertical share is |dz| / r: sigma_v = depth_noise_std r |dz|.
+  return p.depth_noise_std * r * std::abs(dz);
+}
+
+IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                        const Point3f* o, std::vector<VoxelClass>& classes) {
   IsmStats st;
   const int m = g.cells();
-  if (classes) classes->assign(static_cast<size_t>(m) * m, VoxelClass::None);
-  const double area = g.resolution() * g.resolution();
-  const double two_s2 = 2.0 * p.sigma2;
-  const double ca = std::cos(grid.robot().phi()), sa = std::sin(grid.robot().phi());
-  const double rx = grid.robot().x(), ry = grid.robot().y();
+  const size_t mm = static_cast<size_t>(m) * m;
+  classes.assign(mm, VoxelClass::None);
+  // Per voxel: rule-1 threshold and the standard error of the mean (kept for rule 3).
+  thread_local std::vector<float> thr, se;
+  thr.resize(mm);
+  se.resize(mm);
+  std::vector<int32_t> queue;
+  queue.reserve(mm / 4);
   for (int i = 0; i < m; ++i)
     for (int j = 0; j < m; ++j) {
       const ElevationCell& c = g.at(i, j);
       if (c.n == 0) continue;
-      ++st.voxels;
+      const size_t k = static_cast<size_t>(i) * m + j;
       const double x = g.centre(i), y = g.centre(j);
-      const double d = voxelPlaneDistance(c, x, y, plane);
-      const bool obstacle = d > p.d_pth;
-      if (classes)
-        (*classes)[static_cast<size_t>(i) * m + j] =
-            obstacle ? VoxelClass::Obstacle : VoxelClass::Ground;
-      obstacle ? ++st.obstacle_voxels : ++st.ground_voxels;
-      const double rho = voxelDensity(c, area, p);
-      // Voxel in the odometry frame; |c_v| its distance to the robot.
-      const double wx = rx + ca * x - sa * y, wy = ry + sa * x + ca * y;
-      const double cv = std::hypot(x, y);
-      const int vi = grid.cellX(wx), vj = grid.cellY(wy);
-      // Obstacles keep p > 0.5 beyond the voxel while rho exp(-D^2/2s^2) > 0.5.
-      const double beyond = obstacle && 2 * rho > 1 ? std::sqrt(two_s2 * std::log(2 * rho)) : 0.0;
-      const double reach = cv + 0.75 * grid.resolution() + beyond;
-      bool passed = false;
-      grid.walkRay(wx, wy, reach, [&](int ci, int cj, double dc, int) {
-        const bool at_voxel = ci == vi && cj == vj;
-        double pr;
-        if (!passed) {
-          // |c| in [0, |c_v|], 001 Eq. (5).
-          const double D = at_voxel ? 0.0 : std::min(0.0, dc - cv);
-          if (obstacle)
-            pr = std::max(rho, 0.5) * std::exp(-D * D / two_s2);
-          else
-            pr = p.k_g + (0.5 - p.k_g) / (1.0 + std::exp(-D));
-          // (The thesis, 000 ch. 3, writes the ground branch with the Gaussian
-          // exp(-D^2 / 2 sigma^2) inside the sigmoid; SPEC.md: the paper's form.)
-        } else {
-          // |c| in ]|c_v|, max], 001 Eq. (6): ground voxels say nothing beyond.
-          if (!obstacle) return;
-          const double D = std::max(0.0, dc - cv);
-          pr = std::max(rho * std::exp(-D * D / two_s2), 0.5);
-        }
-        grid.addEvidence(ci, cj, static_cast<float>(pr));
-        if (at_voxel) passed = true;
-      });
+      const double sv = verticalNoise(p, o, x, y, c.mean);
+      const double t = std::max(p.d_pth, p.noise_k * sv);
+      const double e = sv / std::sqrt(static_cast<double>(c.n));
+      thr[k] = static_cast<float>(t);
+      se[k] = static_cast<float>(e);
+      // Rule 1 (001): max distance of z+ and z- to the plane.
+      bool obstacle = voxelPlaneDistance(c, x, y, plane) > t;
+      // Rule 2: the mean of a voxel with enough samples (d_min, 001 Eq. 4).
+      if (!obstacle && p.mean_step > 0 && c.n >= std::max(1.0, p.d_min))
+        obstacle = plane.distance(x, y, c.mean) > p.mean_step + p.noise_k * e;
+      classes[k] = obstacle ? VoxelClass::Obstacle : VoxelClass::Ground;
+      if (!obstacle) queue.push_back(static_cast<int32_t>(k));
     }
+  // Rule 3: breadth first from the ground voxels over off-plane voxels that
+  // are flat within the noise and reached through slopes the robot climbs.
+  if (p.max_slope_deg > 0) {
+    const double rise = std::tan(p.max_slope_deg * M_PI / 180.0) * g.resolution();
+    constexpr int kBaseline = 4;  // cells (20 cm at d_r = 5 cm)
+    auto cells_mean = [&](int32_t k) { return g.at(k / m, k % m).mean; };
+    const uint32_t min_n = static_cast<uint32_t>(std::max(1.0, p.d_min));
+    // Differences of means are Gaussian (many samples): mean_k standard errors.
+    const double mk = p.mean_k;
+    // Chamfer (3-4) distance of every cell to the nearest voxel on the plane
+    // (rules 1-2 ground), in cells: a surface that left the plane `dist`
+    // away rose at most tan(max_slope) dist above it. This bounds the creep
+    // of the breadth-first search over a small step blurred by the noise.
+    // Sources: on-plane voxels in connected patches of at least kMinSource
+    // cells; a lone noisy voxel that happens to lie near the plane (far on a
+    // lower floor) must not seed a "surface" there.
+    constexpr size_t kMinSource = 16;  // cells (0.04 m^2 at d_r = 5 cm)
+    {
+      thread_local std::vector<uint8_t> seen;
+      seen.assign(mm, 0);
+      std::vector<int32_t> sources, comp;
+      sources.reserve(queue.size());
+      for (const int32_t s0 : queue) {
+        if (seen[s0]) continue;
+        comp.clear();
+        comp.push_back(s0);
+        seen[s0] = 1;
+        for (size_t h = 0; h < comp.size(); ++h) {
+          const int ci = comp[h] / m, cj = comp[h] % m;
+          const int nbs[4][2] = {{ci - 1, cj}, {ci + 1, cj}, {ci, cj - 1}, {ci, cj + 1}};
+          for (const auto& q : nbs) {
+            if (!g.inside(q[0], q[1])) continue;
+            const int32_t b = q[0] * m + q[1];
+            if (seen[b] || classes[b] != VoxelClass::Ground) continue;
+            seen[b] = 1;
+            comp.push_back(b);
+          }
+        }
+        if (comp.size() >= kMinSource) sources.insert(sources.end(), comp.begin(), comp.end());
+      }
+      queue.swap(sources);
+    }
+    thread_local std::vector<int32_t> dist, near;
+    dist.assign(mm, 1 << 29);
+    near.assign(mm, -1);
+    for (int32_t k : queue) {
+      dist[k] = 0;
+      near[k] = k;
+    }
+    auto relax = [&](size_t k, size_t from, int w) {
+      if (dist[from] + w < dist[k]) {
+        dist[k] = dist[from] + w;
+        near[k] = near[from];
+      }
+    };
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < m; ++j) {
+        const size_t k = static_cast<size_t>(i) * m + j;
+        if (i > 0) {
+          relax(k, k - m, 3);
+          if (j > 0) relax(k, k - m - 1, 4);
+          if (j + 1 < m) relax(k, k - m + 1, 4);
+        }
+        if (j > 0) relax(k, k - 1, 3);
+      }
+    for (int i = m - 1; i >= 0; --i)
+      for (int j = m - 1; j >= 0; --j) {
+        const size_t k = static_cast<size_t>(i) * m + j;
+        if (i + 1 < m) {
+          relax(k, k + m, 3);
+          if (j > 0) relax(k, k + m - 1, 4);
+          if (j + 1 < m) relax(k, k + m + 1, 4);
+        }
+        if (j + 1 < m) relax(k, k + 1, 3);
+      }
+    for (size_t h = 0; h < queue.size(); ++h) {
+      const int32_t a = queue[h];
+      const int ai = a / m, aj = a % m;
+      const int dirs[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+      for (const auto& dv : dirs) {
+        const int bi = ai + dv[0], bj = aj + dv[1];
+        if (!g.inside(bi, bj)) continue;
+        const size_t b = static_cast<size_t>(bi) * m + bj;
+        if (classes[b] != VoxelClass::Obstacle) continue;
+        const ElevationCell& c = g.at(bi, bj);
+        // Too few samples to judge a slope (001 Eq. 4's d_min): the sparse
+        // cells of the noise streak behind a depth edge must not bridge it.
+        if (c.n <= min_n) continue;
+        // No step inside: z+ and z- within the rule-1 band around the cell's
+        // own mean, widened by one sigma_v (a ramp voxel of ~30 samples has a
+        // 4-sigma sample now and then; a step inside is larger).
+        const double flat = thr[b] + se[b] * std::sqrt(static_cast<double>(c.n));
+        if (c.z_hi - c.mean > flat || c.mean - c.z_lo > flat) continue;
+        // Height over the nearest on-plane voxel (not the plane: when a ramp
+        // and its landing fill the view the plane itself is tilted).
+        const int32_t nb = near[b];
+        if (nb < 0) continue;
+        const double off = std::abs(c.mean - cells_mean(nb));
+        const double se2 = static_cast<double>(se[nb]) * se[nb] + se[b] * se[b];
+        if (off > rise * dist[b] / 3.0 + mk * std::sqrt(se2)) continue;  // too high too soon
+        // The slope from b back to the ground cells 1..kBaseline cells behind
+        // it (this direction) stays within max_slope: a step blurred over
+        // two or three cells by the noise (a 2 cm box edge) is no ramp.
+        bool ok = true;
+        for (int k = 1; k <= kBaseline && ok; ++k) {
+          const int ci = bi - k * dv[0], cj = bj - k * dv[1];
+          if (!g.inside(ci, cj)) break;
+          const size_t q = static_cast<size_t>(ci) * m + cj;
+          if (classes[q] != VoxelClass::Ground) break;
+          const double tol =
+              k * rise + mk * std::sqrt(static_cast<double>(se[q]) * se[q] + se[b] * se[b]);
+          ok = std::abs(c.mean - g.at(ci, cj).mean) <= tol;
+        }
+        if (!ok) continue;
+        classes[b] = VoxelClass::Ground;
+        ++st.rescued_voxels;
+        queue.push_back(static_cast<int32_t>(b));
+      }
+    }
+  }
+  for (size_t k = 0; k < mm; ++k) {
+    if (classes[k] == VoxelClass::None) continue;
+    ++st.voxels;
+    classes[k] == VoxelClass::Obstacle ? ++st.obstacle_voxels : ++st.ground_voxels;
+  }
+  return st;
+}
+
+IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                      LocalOccupancy& grid, std::vector<VoxelClass>* classes_out,
+                      const Point3f* sensor_origin) {
+  thread_local std::vector<VoxelClass> local;
+  std::vector<VoxelClass>& classes = classes_out ? *classes_out : local;
+  const IsmStats st = classifyVoxels(g, plane, p, sensor_origin, classes);
+  const int m = g.cells();
+  const double area = g.resolution() * g.resolution();
+  const double two_s2 = 2.0 * p.sigma2;
+  const double ca = std::cos(grid.robot().phi()), sa = std::sin(grid.robot().phi());
+  const double rx = grid.robot().x(), ry = grid.robot().y();
+  // Look-up tables over |D| (1 mm steps) for the Gaussian exp(-D^2 / 2 sigma^2)
+  // and the ground sigmoid 1 / (1 + exp(-D)) of 001 Eqs. (5)-(6).
+  constexpr double kStep = 1e-3;
+  const size_t n_lut = static_cast<size_t>(grid.cells() * grid.resolution() * 1.5 / kStep) + 2;
+  thread_local std::vector<float> gauss, sigm;
+  thread_local double lut_s2 = -1;
+  if (gauss.size() != n_lut || lut_s2 != two_s2) {
+    gauss.resize(n_lut);
+    sigm.resize(n_lut);
+    for (size_t k = 0; k < n_lut; ++k) {
+      const double D = -static_cast<double>(k) * kStep;
+      gauss[k] = static_cast<float>(std::exp(-D * D / two_s2));
+      sigm[k] = static_cast<float>(1.0 / (1.0 + std::exp(-D)));
+    }
+    lut_s2 = two_s2;
+  }
+  auto lut = [&](const std::vector<float>& t, double D) {
+    const size_t k = static_cast<size_t>(std::abs(D) / kStep + 0.5);
+    return t[std::min(k, n_lut - 1)];
+  };
+  const float kg = static_cast<float>(p.k_g);
+  // Voxels from the farthest to the nearest (the grid is robot-centred: the
+  // order is fixed). Each ray is walked from its voxel back to the robot and
+  // stops once kSaturated cells in a row already hold free evidence at least
+  // as strong as this ray's (a farther voxel's ray through them, processed
+  // earlier, said more): same grid, a fraction of the cells visited.
+  thread_local std::vector<int32_t> order;
+  thread_local int order_m = -1;
+  thread_local double order_r = -1;
+  if (order_m != m || order_r != g.resolution()) {
+    order.resize(static_cast<size_t>(m) * m);
+    for (int32_t k = 0; k < m * m; ++k) order[k] = k;
+    std::vector<double> d2(order.size());
+    for (int32_t k = 0; k < m * m; ++k) d2[k] = std::hypot(g.centre(k / m), g.centre(k % m));
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int32_t a, int32_t b) { return d2[a] > d2[b]; });
+    order_m = m;
+    order_r = g.resolution();
+  }
+  constexpr int kSaturated = 3;
+  for (const int32_t k : order) {
+    const VoxelClass vc = classes[k];
+    if (vc == VoxelClass::None) continue;
+    const int i = k / m, j = k % m;
+    const ElevationCell& c = g.at(i, j);
+    const bool obstacle = vc == VoxelClass::Obstacle;
+    const double x = g.centre(i), y = g.centre(j);
+    const double rho = obstacle ? voxelDensity(c, area, p) : 0.0;
+    const float amp = static_cast<float>(std::max(rho, 0.5));
+    // Voxel in the odometry frame; |c_v| its distance to the robot.
+    const double wx = rx + ca * x - sa * y, wy = ry + sa * x + ca * y;
+    const double cv = std::hypot(x, y);
+    const int vi = grid.cellX(wx), vj = grid.cellY(wy);
+    // |c| in [0, |c_v|], 001 Eq. (5), from the voxel back to the robot.
+    int sat = 0;
+    grid.walkSegment(wx, wy, cv, 0.0, [&](int ci, int cj, double dc) {
+      const bool at_voxel = ci == vi && cj == vj;
+      const double D = at_voxel ? 0.0 : std::min(0.0, dc - cv);
+      // (The thesis, 000 ch. 3, writes the ground branch with the Gaussian
+      // exp(-D^2 / 2 sigma^2) inside the sigmoid; SPEC.md: the paper's form.)
+      const float pr = obstacle ? amp * lut(gauss, D) : kg + (0.5f - kg) * lut(sigm, D);
+      if (pr < 0.5f && grid.frameFree(ci, cj) <= pr) {
+        if (++sat >= kSaturated) return false;
+      } else {
+        sat = 0;
+      }
+      grid.addEvidence(ci, cj, pr);
+      return true;
+    });
+    // |c| in ]|c_v|, max], 001 Eq. (6): ground voxels say nothing beyond;
+    // obstacles keep p > 0.5 while rho exp(-D^2/2s^2) > 0.5.
+    if (!obstacle || 2 * rho <= 1) continue;
+    const double beyond = std::sqrt(two_s2 * std::log(2 * rho));
+    grid.walkSegment(
+        wx, wy, cv, cv + 0.75 * grid.resolution() + beyond, [&](int ci, int cj, double dc) {
+          if (ci == vi && cj == vj) return true;
+          const double D = std::max(0.0, dc - cv);
+          grid.addEvidence(ci, cj, std::max(static_cast<float>(rho) * lut(gauss, D), 0.5f));
+          return true;
+        });
+  }
   return st;
 }
 

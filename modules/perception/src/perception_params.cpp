@@ -70,7 +70,25 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
                 "inlier distance of the RANSAC plane fits")
           .integer("seed", &P::seed, "", 0, 2147483647, "random seed")
           .real("d_pth", &P::d_pth, "m", 0, 1,
-                "voxels farther than this from the ground plane are obstacles (001 Table I)")
+                "voxels farther than this from the ground plane are obstacles (001 Table I); "
+                "with depth_noise_std the threshold grows to noise_k vertical depth sigmas")
+          .real("depth_noise_std", &P::depth_noise_std, "m", 0, 1,
+                "depth noise model of the 3D sensor: std of the depth at 1 m range, growing with "
+                "the square of the range (sigma(r) = depth_noise_std r^2); 0: no noise model, "
+                "fixed d_pth (001). Set it to the sensor's noise_std")
+          .real("noise_k", &P::noise_k, "", 0, 20,
+                "voxel z+/z- farther than noise_k vertical noise sigmas at the voxel's range "
+                "(and means farther than noise_k standard errors) are not noise")
+          .real("mean_step", &P::mean_step, "m", 0, 1,
+                "a voxel whose mean elevation lies more than this (plus noise_k standard errors) "
+                "off the ground plane is an obstacle: small boxes >= 20 mm (SPEC.md sec. 2); "
+                "0: off")
+          .real("max_slope_deg", &P::max_slope_deg, "deg", 0, 45,
+                "off-plane voxels flat within the noise and connected to the ground through "
+                "steps no steeper than this slope (plus noise) are traversable (ramps); 0: off")
+          .real("mean_k", &P::mean_k, "", 0, 20,
+                "ramp rule: differences of voxel means may exceed the max_slope rise by this "
+                "many standard errors (noise of the means)")
           .real("k_g", &P::k_g, "", 0, 0.5, "K_g: ground amplitude gain (001 Table I)")
           .real("sigma2", &P::sigma2, "m^2", 1e-6, 10, "sigma^2: ISM Gaussian variance")
           .real("k_n", &P::k_n, "", 0, 10, "K_n: voxel density sample normalisation factor")

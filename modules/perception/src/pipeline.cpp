@@ -63,12 +63,12 @@ FrameResult Pipeline::process(const FrameInput& in, bool virtual_scans) {
   static const Cloud kEmpty;
   const Cloud& c = in.cloud ? *in.cloud : kEmpty;
   r.points_total = c.points.size();
-  r.points_valid = c.validCount();
   r.plane_source = "none";
   grid_.beginFrame();
   if (method_ == Method::RrtGpd || method_ == Method::Ransac) {
     auto t = Clock::now();
     elev_.build(c, p_.z_min, p_.z_max, p_.outlier_sigma);
+    r.points_valid = elev_.validPoints();  // counted by the grid's single pass
     r.timing_ms.emplace_back("elevation_grid", msSince(t));
     t = Clock::now();
     if (elev_.validCells() > 0) {
@@ -83,13 +83,16 @@ FrameResult Pipeline::process(const FrameInput& in, bool virtual_scans) {
     }
     r.timing_ms.emplace_back("ground_plane", msSince(t));
     t = Clock::now();
-    if (r.plane) r.ism = integrateIsm(elev_, *r.plane, p_, grid_, &r.voxel_classes);
+    if (r.plane)
+      r.ism = integrateIsm(elev_, *r.plane, p_, grid_, &r.voxel_classes, &in.sensor_origin);
     r.timing_ms.emplace_back("ism", msSince(t));
   } else if (method_ == Method::HeightBand) {
+    r.points_valid = c.validCount();
     auto t = Clock::now();
     integrateHeightBand(c, p_, grid_);
     r.timing_ms.emplace_back("height_band", msSince(t));
   } else {
+    r.points_valid = c.validCount();
     auto t = Clock::now();
     if (!in.depth_obs)
       throw InputError(
@@ -256,7 +259,8 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
     j.key("ransac_inliers").value(static_cast<uint64_t>(r.ground.ransac_inliers));
     j.key("voxels").beginObject().key("total").value(static_cast<uint64_t>(r.ism.voxels));
     j.key("ground").value(static_cast<uint64_t>(r.ism.ground_voxels));
-    j.key("obstacle").value(static_cast<uint64_t>(r.ism.obstacle_voxels)).endObject();
+    j.key("obstacle").value(static_cast<uint64_t>(r.ism.obstacle_voxels));
+    j.key("rescued").value(static_cast<uint64_t>(r.ism.rescued_voxels)).endObject();
     j.key("cells").beginObject().key("occupied").value(static_cast<uint64_t>(r.counts.occupied));
     j.key("free").value(static_cast<uint64_t>(r.counts.free));
     j.key("unknown").value(static_cast<uint64_t>(r.counts.unknown)).endObject();

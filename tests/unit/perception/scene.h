@@ -30,6 +30,14 @@ struct Scene {
     boxes.push_back(b);
     return *this;
   }
+  /** A ramp rising along +x from x0 (height 0) to x1 (height `rise`), then a
+   *  landing at that height to x = 10; built from 2 mm steps. */
+  Scene& ramp(double x0, double x1, double rise) {
+    const int n = static_cast<int>(std::ceil(std::abs(rise) / 0.002));
+    for (int k = 1; k <= n; ++k)
+      boxes.push_back({x0 + (x1 - x0) * (k - 0.5) / n, 10, -10, 10, -2, rise * k / n});
+    return *this;
+  }
   /** Nearest hit distance along the ray, or +inf. */
   double cast(const double o[3], const double d[3]) const {
     double best = std::numeric_limits<double>::infinity();
@@ -55,12 +63,12 @@ struct Scene {
 };
 
 /** Kinect-One-like camera: 512 x 424, 70.6 x 60 deg, 0.5-4.5 m, noise along
- *  the ray growing with range (1.5 mm + 1.5 mm per m). Returns the organised
- *  cloud in the robot frame; `camera_frame` (optional) receives the same
- *  points in the optical frame (x right, y down, z forward). */
+ *  the ray growing with range (1.5 mm + 1.5 mm per m, or quadratic_noise t^2). Returns the
+ * organised cloud in the robot frame; `camera_frame` (optional) receives the same points in the
+ * optical frame (x right, y down, z forward). */
 inline Cloud renderDepth(const Scene& s, const mrpt::poses::CPose3D& pose, unsigned seed = 7,
                          double noise_scale = 1.0, Cloud* camera_frame = nullptr, int W = 512,
-                         int H = 424) {
+                         int H = 424, double quadratic_noise = 0.0) {
   const double fx = (W / 2.0) / std::tan(35.3 * M_PI / 180),
                fy = (H / 2.0) / std::tan(30 * M_PI / 180);
   const auto R = pose.getRotationMatrix();
@@ -85,7 +93,11 @@ inline Cloud renderDepth(const Scene& s, const mrpt::poses::CPose3D& pose, unsig
         cam.points.push_back({nan, nan, nan});
         continue;
       }
-      const double tn = t + noise_scale * (0.0015 + 0.0015 * range) * n01(rng);
+      // quadratic_noise > 0: the simulator's model instead, std quadratic_noise
+      // t^2 on the depth t (ini/isr-aiwalker.ini: 5 mm at 1 m).
+      const double sd =
+          quadratic_noise > 0 ? quadratic_noise * t * t : noise_scale * (0.0015 + 0.0015 * range);
+      const double tn = t + sd * n01(rng);
       out.points.push_back({static_cast<float>(o[0] + tn * d[0]),
                             static_cast<float>(o[1] + tn * d[1]),
                             static_cast<float>(o[2] + tn * d[2])});

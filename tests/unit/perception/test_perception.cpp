@@ -315,6 +315,170 @@ TEST(PerceptionScene, SameSeedSameOutputDifferentSeedStillFindsFloor) {
   EXPECT_NEAR(c2.r.plane->d, 0.0, 0.02);
 }
 
+// ------------------------------------------------- noise-aware voxel rules
+// Depth noise of ini/isr-aiwalker.ini's Kinect: 5 mm at 1 m, growing with the
+// square of the depth (4.5 cm at 3 m), as the simulator renders it.
+constexpr double kProfileNoise = 0.005;
+
+Cloud noisyFrame(const Scene& s, unsigned seed = 7) {
+  return renderDepth(s, walkerKinect(), seed, 1.0, nullptr, 512, 424, kProfileNoise);
+}
+
+PerceptionParams noiseAware() {
+  PerceptionParams p;
+  p.depth_noise_std = kProfileNoise;  // what the profile sets
+  return p;
+}
+
+TEST(PerceptionNoise, NoisyFlatFloorStaysFreeToFourMetres) {
+  Scene s;
+  s.floor(-10, 10);
+  for (unsigned seed : {7u, 8u}) {
+    const Cloud c = noisyFrame(s, seed);
+    const auto run = perceive(c, Method::RrtGpd, noiseAware());
+    ASSERT_TRUE(run.r.plane);
+    const auto& g = run.pipe->grid();
+    // The floor in view (0.7 m to the 4.5 m depth limit, ~4 m ahead) stays
+    // free: no occupied cell, and almost every cell free out to 3.5 m.
+    EXPECT_EQ(occupiedShare(g, 0.7, 4.2, -1.5, 1.5), 0.0) << "seed " << seed;
+    EXPECT_GT(freeShare(g, 0.8, 3.5, -0.5, 0.5), 0.95) << "seed " << seed;
+  }
+  // Without the noise model (001's fixed d_pth = 3 cm) the same frame puts
+  // obstacles on the far floor: this is what the noise model fixes.
+  const auto fixed = perceive(noisyFrame(s), Method::RrtGpd);
+  EXPECT_GT(occupiedShare(fixed.pipe->grid(), 2.0, 3.5, -0.5, 0.5), 0.2);
+}
+
+TEST(PerceptionNoise, StairOutletAndGutterStayObstaclesUnderNoise) {
+  Scene s;
+  // An outlet 10 x 10 cm, 4 cm deep, 1.3 m ahead; a gutter 15 cm wide, 10 cm
+  // deep, 1.9 m ahead; a stair down 2.6 m ahead (robot frame).
+  s.floor(-10, 1.3).floor(1.4, 1.9).floor(2.05, 2.6).floor(2.6, 10, -0.17);
+  s.box({1.3, 1.4, -10, -0.05, -2, 0}).box({1.3, 1.4, 0.05, 10, -2, 0});
+  s.box({1.3, 1.4, -0.05, 0.05, -2, -0.04});  // outlet bottom
+  s.floor(1.9, 2.05, -0.1);                   // gutter bottom
+  const auto run = perceive(noisyFrame(s), Method::RrtGpd, noiseAware());
+  ASSERT_TRUE(run.r.plane);
+  EXPECT_NEAR(run.r.plane->d, 0.0, 0.02);
+  const auto& g = run.pipe->grid();
+  EXPECT_GT(occupiedShare(g, 1.3, 1.4, -0.05, 0.05), 0.5) << "outlet";
+  int cols = 0, blocked = 0;  // every lateral column meets the gutter
+  for (int j = g.cellY(-0.5); j <= g.cellY(0.5); ++j) {
+    ++cols;
+    bool occ = false;
+    for (int i = g.cellX(1.85); i <= g.cellX(2.1); ++i) occ = occ || g.prob(i, j) > 0.55;
+    blocked += occ ? 1 : 0;
+  }
+  EXPECT_EQ(blocked, cols) << "gutter";
+  // The lower floor is seen from 3.05 m (occlusion behind the edge).
+  EXPECT_GT(occupiedShare(g, 3.1, 3.8, -0.5, 0.5), 0.9) << "lower floor past the stair edge";
+  EXPECT_EQ(occupiedShare(g, 0.7, 1.2, -0.5, 0.5), 0.0) << "floor before the outlet";
+}
+
+TEST(PerceptionNoise, SixDegreeRampAndLandingStayFree) {
+  Scene s;
+  s.floor(-10, 10).ramp(1.3, 2.8, 0.1577);  // 6 deg over 1.5 m, then a landing
+  const auto run = perceive(noisyFrame(s), Method::RrtGpd, noiseAware());
+  ASSERT_TRUE(run.r.plane);
+  EXPECT_GT(run.r.ism.rescued_voxels, 100u);
+  const auto& g = run.pipe->grid();
+  // A few isolated voxels (one frame, 2 mm ramp steps) stay obstacles: < 5 %.
+  EXPECT_LT(occupiedShare(g, 0.7, 3.8, -0.8, 0.8), 0.05);
+  EXPECT_GT(freeShare(g, 1.3, 3.3, -0.5, 0.5), 0.9);
+  // With the traversable-surface rule off, one plane per frame marks the
+  // ramp (or the floor before it) as obstacle.
+  PerceptionParams off = noiseAware();
+  off.max_slope_deg = 0;
+  const auto one_plane = perceive(noisyFrame(s), Method::RrtGpd, off);
+  EXPECT_GT(occupiedShare(one_plane.pipe->grid(), 0.7, 3.8, -0.8, 0.8), 0.2);
+}
+
+TEST(PerceptionNoise, StepOfAStairUpIsNoRamp) {
+  // A 17 cm step up: flat on both sides, but not reachable by any slope.
+  Scene s;
+  s.floor(-10, 10).box({1.8, 10, -10, 10, -2, 0.17});
+  const auto run = perceive(noisyFrame(s), Method::RrtGpd, noiseAware());
+  ASSERT_TRUE(run.r.plane);
+  EXPECT_NEAR(run.r.plane->d, 0.0, 0.02);
+  EXPECT_GT(occupiedShare(run.pipe->grid(), 1.8, 2.5, -0.5, 0.5), 0.9);
+}
+
+TEST(PerceptionNoise, TwoCentimetreBoxIsAnObstacleAtOneAndAHalfMetres) {
+  // HOBBIT's 20 mm limit (SPEC.md sec. 2), 1 cm under 001's d_pth = 3 cm;
+  // the step is too abrupt for the traversable-surface rule.
+  Scene s;
+  s.floor(-10, 10).box({1.5, 1.7, -0.15, 0.15, -2, 0.02});
+  const auto run = perceive(noisyFrame(s), Method::RrtGpd, noiseAware());
+  const auto& g = run.pipe->grid();
+  EXPECT_GT(occupiedShare(g, 1.5, 1.7, -0.15, 0.15), 0.5);
+  EXPECT_EQ(occupiedShare(g, 0.7, 1.3, -0.5, 0.5), 0.0);
+}
+
+namespace {
+/** Elevation grid of a noise-free floor at z = 0 (plus a +-2 mm spread per
+ *  cell) from x 0.5 to 2.5 m, with `patch(x, y)` added to the height. */
+template <class F>
+ElevationGrid patchGrid(F&& patch) {
+  Cloud c;
+  for (double x = 0.5; x < 2.5; x += 0.0125)
+    for (double y = -0.5; y < 0.5; y += 0.0125)
+      for (int k = 0; k < 2; ++k)
+        c.points.push_back({static_cast<float>(x), static_cast<float>(y),
+                            static_cast<float>(patch(x, y) + (k ? 0.002 : -0.002))});
+  c.width = c.points.size();
+  ElevationGrid g(200, 0.05);
+  g.build(c, -1, 2, 3);
+  return g;
+}
+VoxelClass classAt(const ElevationGrid& g, const std::vector<VoxelClass>& cl, double x, double y) {
+  return cl[static_cast<size_t>(g.cellOf(x)) * g.cells() + g.cellOf(y)];
+}
+}  // namespace
+
+TEST(PerceptionNoise, MeanRuleFindsAFlatTwoCentimetreTopThatTheDistanceRuleMisses) {
+  const auto g = patchGrid(
+      [](double x, double y) { return x > 1.5 && x < 1.7 && std::abs(y) < 0.15 ? 0.02 : 0.0; });
+  PerceptionParams p;
+  std::vector<VoxelClass> cl;
+  classifyVoxels(g, Plane{}, p, nullptr, cl);
+  EXPECT_EQ(classAt(g, cl, 1.6, 0.0), VoxelClass::Obstacle);
+  EXPECT_EQ(classAt(g, cl, 1.2, 0.0), VoxelClass::Ground);
+  p.mean_step = 0;  // 001's rule alone: z+ = 2.2 cm < d_pth
+  classifyVoxels(g, Plane{}, p, nullptr, cl);
+  EXPECT_EQ(classAt(g, cl, 1.6, 0.0), VoxelClass::Ground);
+}
+
+TEST(PerceptionNoise, RampRuleKeepsSlopesUpToMaxSlopeAndStopsAtSteeperOnes) {
+  auto ramp = [](double deg) {
+    return [deg](double x, double) {
+      return x < 1.0 ? 0.0 : std::tan(deg * M_PI / 180) * (std::min(x, 2.0) - 1.0);
+    };
+  };
+  PerceptionParams p;  // max_slope_deg 8
+  std::vector<VoxelClass> cl;
+  const auto six = patchGrid(ramp(6));
+  const IsmStats st = classifyVoxels(six, Plane{}, p, nullptr, cl);
+  EXPECT_GT(st.rescued_voxels, 300u);
+  EXPECT_EQ(classAt(six, cl, 1.8, 0.0), VoxelClass::Ground);  // 8 cm up the ramp
+  EXPECT_EQ(classAt(six, cl, 2.3, 0.0), VoxelClass::Ground);  // the landing, 10.5 cm up
+  const auto twelve = patchGrid(ramp(12));
+  classifyVoxels(twelve, Plane{}, p, nullptr, cl);
+  EXPECT_EQ(classAt(twelve, cl, 1.8, 0.0), VoxelClass::Obstacle);
+  EXPECT_EQ(classAt(twelve, cl, 2.3, 0.0), VoxelClass::Obstacle);
+}
+
+TEST(PerceptionNoise, VerticalNoiseFollowsTheQuadraticDepthModel) {
+  PerceptionParams p;
+  const Point3f o{0.2f, 0.f, 0.9f};
+  EXPECT_EQ(verticalNoise(p, &o, 3, 0, 0), 0.0);  // no model: 001's fixed d_pth
+  p.depth_noise_std = 0.005;
+  EXPECT_EQ(verticalNoise(p, nullptr, 3, 0, 0), 0.0);
+  // Floor 2.8 m ahead of the camera: r = sqrt(2.8^2 + 0.9^2), sigma = a r^2
+  // along the ray, vertical share 0.9 / r.
+  const double r = std::hypot(2.8, 0.9);
+  EXPECT_NEAR(verticalNoise(p, &o, 3, 0, 0), 0.005 * r * r * 0.9 / r, 1e-9);
+}
+
 TEST(PerceptionScene, EmptyAndAllNaNFramesAreNoInformation) {
   Cloud empty;
   Cloud nan;

@@ -3,6 +3,7 @@
 
 #include <carenav/perception/cloud.h>
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -40,6 +41,8 @@ class ElevationGrid {
   int cellOf(double v) const { return static_cast<int>(std::floor(v / r_ + m_ * 0.5)); }
   double centre(int i) const { return (i + 0.5 - m_ * 0.5) * r_; }
   size_t validCells() const { return valid_; }
+  /** Valid (finite, non-zero) points of the last build's cloud. */
+  size_t validPoints() const { return last_valid_; }
   size_t outliersRemoved() const { return outliers_; }
 
   /** Inverse-distance weighted elevation (cell means) at robot-frame (x, y)
@@ -52,8 +55,25 @@ class ElevationGrid {
   int m_;
   double r_;
   std::vector<ElevationCell> cells_;
-  std::vector<int32_t> point_cell_;  // scratch: cell of each point (-1 unused)
-  size_t valid_ = 0, outliers_ = 0;
+  // scratch, reused from frame to frame (no allocation once warm)
+  struct PointCell {
+    int32_t cell;
+    float z;
+  };
+  std::vector<PointCell> point_cell_;  // the points used: cell and elevation
+  std::vector<int32_t> touched_;       // cells with data, in first-touch order
+  struct Acc {
+    uint32_t n = 0;
+    float lo = 0, hi = 0;
+    double s = 0, ss = 0;  // sums of (z - ref) and (z - ref)^2 (ref: the first z, stability)
+    float ref = 0;
+  };
+  std::vector<Acc> acc_;
+  struct Band {
+    float lo, hi;
+  };
+  std::vector<Band> band_;  // 3-sigma band of each cell (pass 1)
+  size_t valid_ = 0, outliers_ = 0, last_valid_ = 0;
 };
 
 }  // namespace carenav::perception

@@ -64,6 +64,13 @@ class LocalOccupancy {
    *  the cell centre from the robot, along-ray index) until `max_dist`. */
   template <class F>
   void walkRay(double x, double y, double max_dist, F&& f) const;
+  /** Walks the ray robot -> (x, y) from distance s0 to s1 (either direction,
+   *  half-cell steps, each cell once), calling f(i, j, dist of the cell
+   *  centre from the robot); f returns false to stop. */
+  template <class F>
+  void walkSegment(double x, double y, double s0, double s1, F&& f) const;
+  /** This frame's strongest free evidence in cell (i, j) (0.5: none). */
+  float frameFree(int i, int j) const { return free_[static_cast<size_t>(i) * m_ + j]; }
 
  private:
   int m_;
@@ -73,14 +80,36 @@ class LocalOccupancy {
   std::vector<float> logodds_, occ_, free_;
 };
 
+/** Noise-aware voxel classification (docs/perceive.md "Noise-aware voxel
+ *  rules"), one class per elevation cell (None: no data):
+ *  1. distance rule (001): d = max distance of z+ and z- to the plane; the
+ *     threshold is max(d_pth, noise_k sigma_v), sigma_v the vertical depth
+ *     noise at the voxel (depth_noise_std r^2 along the ray from
+ *     `sensor_origin`, times the ray's vertical share |dz| / r);
+ *  2. mean rule: |mean - plane| > mean_step + noise_k sigma_v / sqrt(N_z)
+ *     (small boxes, SPEC.md: >= 20 mm);
+ *  3. traversable surfaces: an off-plane voxel flat within the rule-1
+ *     threshold around its own mean and connected (4-neighbours, breadth
+ *     first from the plane's ground voxels) through mean steps of at most
+ *     tan(max_slope_deg) d_r + noise_k sigma_diff is ground (ramps).
+ *  `sensor_origin` null: no noise model (sigma_v = 0). */
+struct IsmStats {
+  size_t voxels = 0, obstacle_voxels = 0, ground_voxels = 0;
+  size_t rescued_voxels = 0;  ///< off-plane voxels kept as ground by rule 3
+};
+IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                        const Point3f* sensor_origin, std::vector<VoxelClass>& classes);
+
+/** Vertical noise sigma of a voxel at robot-frame (x, y, z) seen from `o`
+ *  (0 without a noise model). */
+double verticalNoise(const PerceptionParams& p, const Point3f* o, double x, double y, double z);
+
 /** ISM integration of one elevation grid (robot frame) given the ground
  *  plane (robot frame), into `grid` at its current robot pose. `classes`
  *  (optional, one per elevation cell) receives each voxel's class. */
-struct IsmStats {
-  size_t voxels = 0, obstacle_voxels = 0, ground_voxels = 0;
-};
 IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                      LocalOccupancy& grid, std::vector<VoxelClass>* classes = nullptr);
+                      LocalOccupancy& grid, std::vector<VoxelClass>* classes = nullptr,
+                      const Point3f* sensor_origin = nullptr);
 
 /** Voxel density, 001 Eq. (4), h floored at 1 mm (SPEC.md decision). */
 double voxelDensity(const ElevationCell& c, double cell_area, const PerceptionParams& p);
@@ -121,6 +150,36 @@ void LocalOccupancy::walkRay(double x, double y, double max_dist, F&& f) const {
     last_j = j;
     const double cx = centreX(i) - rx, cy = centreY(j) - ry;
     f(i, j, std::sqrt(cx * cx + cy * cy), k++);
+  }
+}
+
+template <class F>
+void LocalOccupancy::walkSegment(double x, double y, double s0, double s1, F&& f) const {
+  const double rx = robot_.x(), ry = robot_.y();
+  const double dx = x - rx, dy = y - ry;
+  const double len = std::sqrt(dx * dx + dy * dy);
+  if (len < 1e-9) {
+    f(cellX(rx), cellY(ry), 0.0);
+    return;
+  }
+  const double ux = dx / len, uy = dy / len;
+  const double inv = 1.0 / r_;
+  const double step = s1 >= s0 ? 0.5 * r_ : -0.5 * r_;
+  const int n = static_cast<int>(std::floor((s1 - s0) / step + 1e-9));
+  int last_i = -(1 << 30), last_j = -(1 << 30);
+  for (int k = 0; k <= n + 1; ++k) {
+    const double s = k <= n ? s0 + k * step : s1;  // the last sample is s1 itself
+    const int i = static_cast<int>(static_cast<long>(std::floor((rx + ux * s) * inv)) - org_i_);
+    const int j = static_cast<int>(static_cast<long>(std::floor((ry + uy * s) * inv)) - org_j_);
+    if (i == last_i && j == last_j) continue;
+    if (!inside(i, j)) {
+      if (step > 0) break;
+      continue;
+    }
+    last_i = i;
+    last_j = j;
+    const double cx = (org_i_ + i + 0.5) * r_ - rx, cy = (org_j_ + j + 0.5) * r_ - ry;
+    if (!f(i, j, std::sqrt(cx * cx + cy * cy))) return;
   }
 }
 

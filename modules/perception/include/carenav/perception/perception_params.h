@@ -34,12 +34,18 @@ struct PerceptionParams {
   double ransac_threshold = 0.02;   ///< m, inlier distance of the RANSAC planes
   int seed = 1;                     ///< random seed (deterministic output)
   // Inverse sensor model (001 Eqs. 4-6)
-  double d_pth = 0.03;   ///< m, distance to the ground plane above which a voxel is an obstacle
-  double k_g = 0.3;      ///< ground amplitude gain
-  double sigma2 = 0.02;  ///< m^2, Gaussian variance
-  double k_n = 0.0005;   ///< sample normalisation factor
-  double d_min = 3;      ///< minimum number of points
-  double k_m = 0.8;      ///< amplitude gain of the voxel density
+  double d_pth = 0.03;  ///< m, distance to the ground plane above which a voxel is an obstacle
+  // Noise-aware classification (docs/perceive.md "Noise-aware voxel rules")
+  double depth_noise_std = 0;  ///< m, depth std at 1 m range, sigma(r) = this * r^2 (0: off)
+  double noise_k = 4;          ///< voxel extremes beyond noise_k vertical sigmas are real
+  double mean_step = 0.012;    ///< m, a voxel mean this far (+ noise_k std errors) is an obstacle
+  double max_slope_deg = 8;    ///< deg, steepest surface connected to the ground kept traversable
+  double mean_k = 2;           ///< ramp rule: standard errors allowed on differences of voxel means
+  double k_g = 0.3;            ///< ground amplitude gain
+  double sigma2 = 0.02;        ///< m^2, Gaussian variance
+  double k_n = 0.0005;         ///< sample normalisation factor
+  double d_min = 3;            ///< minimum number of points
+  double k_m = 0.8;            ///< amplitude gain of the voxel density
   double occupied_threshold = 0.55;  ///< cells above count as occupied
   double free_threshold = 0.45;      ///< cells below count as free
   double logodds_max = 4.6;          ///< |log-odds| clamp of the fused grid (p 0.99)
