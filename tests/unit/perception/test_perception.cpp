@@ -588,3 +588,30 @@ TEST(PerceptionParams, SectionIsRegisteredWithTableIDefaults) {
   for (const auto& i : ok.check()) EXPECT_NE(i.section, "perception") << i.text();
   EXPECT_EQ(ok.section<PerceptionParams>("perception").rrt_iterations, 100);
 }
+
+TEST(PerceptionScene, NoStateCarriesOverBetweenPipelines) {
+  // The pipeline keeps per-thread scratch buffers and lookup tables; a run
+  // must not depend on what ran before it in the same thread (navigation
+  // runs scenario after scenario in one process).
+  Scene s;
+  s.floor(-10, 1.2).floor(1.2, 10, -0.17);
+  const Cloud c = noisyFrame(s, 3);
+  const auto first = perceive(c, Method::RrtGpd, noiseAware());
+  {
+    // Something else in between: another scene, other parameters and method.
+    Scene o;
+    o.floor(-10, 10);
+    PerceptionParams q = noiseAware();
+    q.depth_noise_std = 0.02;
+    q.sigma2 = 0.05;
+    q.resolution = 0.1;
+    perceive(noisyFrame(o, 9), Method::RrtGpd, q);
+    perceive(noisyFrame(o, 9), Method::Ransac, PerceptionParams{});
+  }
+  const auto again = perceive(c, Method::RrtGpd, noiseAware());
+  const auto& ga = first.pipe->grid();
+  const auto& gb = again.pipe->grid();
+  ASSERT_EQ(ga.cells(), gb.cells());
+  for (int i = 0; i < ga.cells(); ++i)
+    for (int j = 0; j < ga.cells(); ++j) ASSERT_EQ(ga.prob(i, j), gb.prob(i, j)) << i << "," << j;
+}
