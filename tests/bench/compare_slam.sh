@@ -84,7 +84,7 @@ ate() {  # est.tum ref.tum by_index -> "rmse"
     awk '!/^#/ { $1 = n++; print }' "$2" > "$2.idx"; r="$2.idx"
   fi
   "$bin" -q eval --est "$e" --ref "$r" --json 2>/dev/null |
-    awk '/"ate"/ { f = 1 } f && /"rmse"/ { gsub(",", ""); printf "%.2f", $2; exit }'
+    awk '/"ate"/ { f = 1 } f && /"rmse"/ { gsub(",", ""); printf "%.3f", $2; exit }'
 }
 for log in intel csail; do
   byidx=0; [ $log = csail ] && byidx=1

@@ -22,17 +22,24 @@ void CorrelativeMatcher::setReference(const mrpt::maps::CSimplePointsMap& ref) {
   table_.assign(static_cast<size_t>(w_) * h_, 0.f);
   const int r = static_cast<int>(std::ceil(3 * p_.sigma / p_.cell));
   const double k = -0.5 / (p_.sigma * p_.sigma);
+  // The Gaussian is separable, exp(k (ex² + ey²)) = exp(k ex²) exp(k ey²):
+  // 2 (2r + 1) exponentials per point instead of (2r + 1)².
+  std::vector<double> fx(2 * r + 1), fy(2 * r + 1);
   for (size_t i = 0; i < xs.size(); ++i) {
     const int cx = static_cast<int>((xs[i] - x0_) / p_.cell);
     const int cy = static_cast<int>((ys[i] - y0_) / p_.cell);
+    for (int d = -r; d <= r; ++d) {
+      const double ex = x0_ + (cx + d + 0.5) * p_.cell - xs[i];
+      const double ey = y0_ + (cy + d + 0.5) * p_.cell - ys[i];
+      fx[d + r] = std::exp(k * ex * ex);
+      fy[d + r] = std::exp(k * ey * ey);
+    }
     for (int dy = -r; dy <= r; ++dy)
       for (int dx = -r; dx <= r; ++dx) {
         const int gx = cx + dx, gy = cy + dy;
         if (gx < 0 || gy < 0 || gx >= w_ || gy >= h_) continue;
-        const double ex = x0_ + (gx + 0.5) * p_.cell - xs[i];
-        const double ey = y0_ + (gy + 0.5) * p_.cell - ys[i];
         float& c = table_[static_cast<size_t>(gy) * w_ + gx];
-        c = std::max(c, static_cast<float>(std::exp(k * (ex * ex + ey * ey))));
+        c = std::max(c, static_cast<float>(fx[dx + r] * fy[dy + r]));
       }
   }
 }
@@ -68,17 +75,62 @@ mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMa
     const double a = std::abs(std::remainder(yaw - prior.phi(), 2 * M_PI)) / (10 * deg);
     return sc - p_.prior_weight * (d + a);
   };
-  // Coarse pass over the whole window.
+  // Coarse pass over the whole window. The coarse step is a whole number of
+  // table cells, so for each yaw the scan points are rotated and turned into
+  // cell indices once, and every translation of the window is an integer
+  // offset of those indices (Olson 2009, sec. IV: the rotation is the only
+  // costly part of evaluating a pose).
   double bx = prior.x(), by = prior.y(), byaw = prior.phi(), best = -1e9;
   const int nxy = static_cast<int>(std::round(p_.window_xy / p_.coarse_xy));
   const int nyaw = static_cast<int>(std::round(p_.window_yaw / p_.coarse_yaw));
+  const double cells_per_step = p_.coarse_xy / p_.cell;
+  const int step = static_cast<int>(std::lround(cells_per_step));
+  const bool integer_steps = step >= 1 && std::abs(cells_per_step - step) < 1e-6;
+  std::vector<int> gx(cx.size()), gy(cx.size());
+  std::vector<double> dist((2 * nxy + 1) * (2 * nxy + 1));  // m, from the prior
+  for (int i = -nxy; i <= nxy; ++i)
+    for (int j = -nxy; j <= nxy; ++j)
+      dist[(i + nxy) * (2 * nxy + 1) + (j + nxy)] = std::hypot(i * p_.coarse_xy, j * p_.coarse_xy);
   for (int a = -nyaw; a <= nyaw; ++a) {
     const double yaw = prior.phi() + a * p_.coarse_yaw * deg;
+    if (!integer_steps) {
+      for (int i = -nxy; i <= nxy; ++i)
+        for (int j = -nxy; j <= nxy; ++j) {
+          const double x = prior.x() + i * p_.coarse_xy, y = prior.y() + j * p_.coarse_xy;
+          const double sc = penalised(score(cx, cy, x, y, yaw), x, y, yaw);
+          if (sc > best) best = sc, bx = x, by = y, byaw = yaw;
+        }
+      continue;
+    }
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    for (size_t k = 0; k < cx.size(); ++k) {
+      gx[k] =
+          static_cast<int>(std::floor((prior.x() + c * cx[k] - s * cy[k] - x0_) / p_.cell + 1e-9));
+      gy[k] =
+          static_cast<int>(std::floor((prior.y() + s * cx[k] + c * cy[k] - y0_) / p_.cell + 1e-9));
+    }
+    // penalised() spelled out: the heading part of the prior's penalty is
+    // the same for the whole yaw, the distance part for every yaw.
+    const double yaw_penalty =
+        p_.prior_weight * std::abs(std::remainder(yaw - prior.phi(), 2 * M_PI)) / (10 * deg);
     for (int i = -nxy; i <= nxy; ++i)
       for (int j = -nxy; j <= nxy; ++j) {
-        const double x = prior.x() + i * p_.coarse_xy, y = prior.y() + j * p_.coarse_xy;
-        const double sc = penalised(score(cx, cy, x, y, yaw), x, y, yaw);
-        if (sc > best) best = sc, bx = x, by = y, byaw = yaw;
+        const int ox = i * step, oy = j * step;
+        double sum = 0;
+        for (size_t k = 0; k < cx.size(); ++k) {
+          const int tx = gx[k] + ox, ty = gy[k] + oy;
+          if (tx < 0 || ty < 0 || tx >= w_ || ty >= h_) continue;
+          sum += table_[static_cast<size_t>(ty) * w_ + tx];
+        }
+        const double sc = (cx.empty() ? 0 : sum / cx.size()) -
+                          p_.prior_weight * dist[(i + nxy) * (2 * nxy + 1) + (j + nxy)] -
+                          yaw_penalty;
+        if (sc > best) {
+          best = sc;
+          bx = prior.x() + i * p_.coarse_xy;
+          by = prior.y() + j * p_.coarse_xy;
+          byaw = yaw;
+        }
       }
   }
   // Fine pass around the coarse optimum, all points.

@@ -37,7 +37,19 @@ const ParamTable<SlamParams>& SlamParams::table() {
           .integer("loop_min_separation", &SlamParams::loop_min_separation, "", 2, 100000,
                    "icp-graph: keyframes between a loop candidate and the current one")
           .real("loop_min_goodness", &SlamParams::loop_min_goodness, "", 0, 1,
-                "icp-graph: smallest ICP quality accepted for a loop closure")
+                "icp-graph: ICP quality that accepts a loop closure outright (below it, a "
+                "closure must pass the visibility checks loop_min_agreement, loop_min_overlap "
+                "and loop_min_distinct)")
+          .real("loop_min_agreement", &SlamParams::loop_min_agreement, "", 0, 1,
+                "icp-graph: smallest visibility agreement of a loop closure: of the points of "
+                "either scan that the other scan saw, the share lying where its beams ended "
+                "(the rest lie in space it saw free)")
+          .real("loop_min_overlap", &SlamParams::loop_min_overlap, "", 0, 1,
+                "icp-graph: smallest share of both scans' points that the other scan saw "
+                "where its beams ended (too little overlap proves nothing)")
+          .real("loop_min_distinct", &SlamParams::loop_min_distinct, "", 0, 1,
+                "icp-graph: smallest share of that overlap lost when the match is moved "
+                "0.3 m in any direction (a match that can slide along a corridor is no fix)")
           .real("loop_max_correction", &SlamParams::loop_max_correction, "m", 0.01, 100,
                 "icp-graph: largest correction a loop closure may make");
   return t;
