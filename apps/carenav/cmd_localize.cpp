@@ -96,8 +96,11 @@ void addLocalizeCommand(CLI::App& app, const GlobalOptions& g) {
       else
         std::cerr << "never converged";
       std::cerr << "; " << r.events.size() << " loss/recovery events, " << r.injections
-                << " injections\n[localize] final pose (" << f.x << ", " << f.y << ", "
-                << f.yaw * 180 / M_PI << " deg)\n";
+                << " injections";
+      if (r.rotate_enabled)
+        std::cerr << ", " << r.rotate_requests.size() << " rotate-in-place requests";
+      std::cerr << "\n[localize] final pose (" << f.x << ", " << f.y << ", " << f.yaw * 180 / M_PI
+                << " deg)\n";
       if (r.ate_rmse) std::cerr << "[localize] ATE rmse " << *r.ate_rmse << " m\n";
       for (const auto& file : r.outputs) std::cerr << "[localize] wrote " << file << "\n";
     }

@@ -22,6 +22,19 @@ const ParamTable<LocalizationParams>& LocalizationParams::table() {
                 "KLD: largest divergence between sample and true posterior")
           .real("resample_ess", &P::resample_ess, "", 0, 1,
                 "resample when the effective sample size ratio falls below")
+          .real("temper_ess", &P::temper_ess, "", 0, 1,
+                "while not converged: the scan likelihood is raised to the largest power <= 1 "
+                "that keeps the effective sample size at least this share of its value before "
+                "the scan (0: no tempering)")
+          .real("temper_beta_min", &P::temper_beta_min, "", 1e-9, 1,
+                "smallest power of the tempered likelihood")
+          .real("global_keep", &P::global_keep, "", 0, 1,
+                "while not converged: KLD lower bound as a share of the global start's particles "
+                "(0: particles_min)")
+          .real("global_min_std_xy", &P::global_min_std_xy, "m", 0, 10,
+                "while not converged: smallest translation noise of a motion (roughening)")
+          .real("global_min_std_phi", &P::global_min_std_phi, "deg", 0, 180,
+                "while not converged: smallest heading noise of a motion (roughening)")
           .real("lf_sigma", &P::lf_sigma, "m", 0.005, 5,
                 "likelihood field: standard deviation of a hit")
           .real("lf_max_corr_dist", &P::lf_max_corr_dist, "m", 0.01, 10,
@@ -53,12 +66,23 @@ const ParamTable<LocalizationParams>& LocalizationParams::table() {
                 "augmented MCL: decay rate of the short-term likelihood average")
           .real("max_inject_fraction", &P::max_inject_fraction, "", 0, 1,
                 "augmented MCL: largest share of particles replaced in one update")
+          .real("lost_inject_fraction", &P::lost_inject_fraction, "", 0, 1,
+                "at a loss: random particles added, as a share of the global start's sample size")
           .real("converged_spread", &P::converged_spread, "m", 0.001, 100,
                 "converged when the position spread sqrt(var x + var y) falls below")
           .real("lost_spread", &P::lost_spread, "m", 0.001, 1000,
-                "a converged filter counts as lost when the spread exceeds")
+                "a converged filter counts as lost when the spread, or the jump of the estimate "
+                "beyond odometry in one update, exceeds")
           .real("free_threshold", &P::free_threshold, "", 0.5, 1,
                 "cells whose free probability is above are free space")
+          .flag("rotate_request", &P::rotate_request,
+                "ask the navigation layer to rotate in place when the filter stays unconverged "
+                "and the robot is not turning")
+          .integer("rotate_after_updates", &P::rotate_after_updates, "", 1, 100000,
+                   "filter updates without convergence before a rotate-in-place request")
+          .real("rotate_turn", &P::rotate_turn, "deg", 1, 3600,
+                "turned while unconverged: the robot is already turning (no request); turned "
+                "since a request: the request ends")
           .integer("seed", &P::seed, "", 0, 2147483647, "random seed")
           .check([](const P& p) -> std::optional<std::string> {
             if (p.particles_min > p.particles_max)

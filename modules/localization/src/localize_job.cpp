@@ -121,8 +121,8 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
     r.track.push_back({t, sr.pose.x(), sr.pose.y(), sr.pose.phi()});
     r.covs.push_back(sr.cov);
     if (sr.updated)
-      r.records.push_back(
-          {t, sr.particles, sr.spread, sr.likelihood_ratio, sr.seconds, sr.injected});
+      r.records.push_back({t, sr.particles, sr.spread, sr.likelihood_ratio, sr.seconds, sr.injected,
+                           sr.beta, sr.resampled});
     if (tty && r.scans % 10 == 0)
       std::cerr << "\r[localize] scan " << r.scans << ", " << sr.particles << " particles, spread "
                 << sr.spread << " m   " << std::flush;
@@ -138,8 +138,14 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
   }
   r.updates = loc.updates();
   r.injections = loc.injections();
+  r.rotate_requests = loc.rotateRequests();
+  r.rotate_enabled = o.params.rotate_request;
   r.events = loc.events();
   for (auto& e : r.events) e.t -= *t_first;
+  for (auto& q : r.rotate_requests) {
+    q.t_start -= *t_first;
+    if (q.t_end) *q.t_end -= *t_first;
+  }
   if (loc.convergenceTime()) r.convergence_time = *loc.convergenceTime() - *t_first;
   r.converged_at_end = loc.converged();
   r.final_spread = loc.spread();
@@ -227,6 +233,24 @@ std::string LocalizeJobResult::summaryJson(const LocalizeJobOptions& o) const {
     j.endObject();
   }
   j.endArray();
+  // rotate-in-place requests to the navigation layer (times relative to the first scan)
+  j.key("rotate_in_place").beginObject();
+  j.key("enabled").value(rotate_enabled);
+  j.key("requests").value(static_cast<uint64_t>(rotate_requests.size()));
+  j.key("list").beginArray();
+  for (const auto& q : rotate_requests) {
+    j.beginObject();
+    j.key("t").value(q.t_start);
+    j.key("end_t");
+    if (q.t_end)
+      j.value(*q.t_end);
+    else
+      j.null();
+    j.key("outcome").value(!q.t_end ? "open" : q.relocalised ? "converged" : "turned");
+    j.endObject();
+  }
+  j.endArray();
+  j.endObject();
   double total = 0, worst = 0;
   for (const auto& rec : records) {
     total += rec.seconds;
@@ -249,6 +273,7 @@ std::string LocalizeJobResult::summaryJson(const LocalizeJobOptions& o) const {
     j.key("t").value(rec.t).key("particles").value(static_cast<uint64_t>(rec.particles));
     j.key("spread").value(rec.spread).key("likelihood_ratio").value(rec.likelihood_ratio);
     j.key("injected").value(static_cast<uint64_t>(rec.injected));
+    j.key("beta").value(rec.beta).key("resampled").value(rec.resampled);
     j.key("ms").value(1000 * rec.seconds);
     j.endObject();
   }

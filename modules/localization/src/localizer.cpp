@@ -28,6 +28,41 @@ double logSumExp(double a, double b) {
   return m + std::log(std::exp(a - m) + std::exp(b - m));
 }
 
+/** ESS ratio (Kong 1992: ESS = (sum w)^2 / sum w^2, over n) of the weights
+ *  exp(a_i + beta l_i). */
+double essRatio(const std::vector<double>& a, const std::vector<double>& l, double beta) {
+  double m = -std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < a.size(); ++i) m = std::max(m, a[i] + beta * l[i]);
+  double s = 0, s2 = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const double w = std::exp(a[i] + beta * l[i] - m);
+    s += w;
+    s2 += w * w;
+  }
+  return s2 > 0 ? s * s / s2 / static_cast<double>(a.size()) : 0;
+}
+
+/** Tempered (power) likelihood p(z|x)^beta: the largest beta in
+ *  [beta_min, 1] whose updated weights keep an ESS ratio of at least
+ *  share * ESS(prior), as adaptive tempering in sequential Monte Carlo does
+ *  (Jasra, Stephens, Doucet, Tsagaris 2011, "Inference for Levy-driven
+ *  stochastic volatility models via adaptive sequential Monte Carlo", sec.
+ *  3.2: the next temperature solves ESS(beta) = target; found here by
+ *  bisection on log beta). share 0: no tempering (beta 1). */
+double temperingExponent(const std::vector<double>& a, const std::vector<double>& l, double share,
+                         double beta_min) {
+  if (share <= 0 || a.empty()) return 1;
+  const double target = share * essRatio(a, l, 0);
+  if (essRatio(a, l, 1) >= target) return 1;
+  if (essRatio(a, l, beta_min) < target) return beta_min;
+  double lo = std::log(beta_min), hi = 0;  // ESS(exp(lo)) >= target > ESS(exp(hi))
+  for (int it = 0; it < 14; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (essRatio(a, l, std::exp(mid)) >= target ? lo : hi) = mid;
+  }
+  return std::exp(lo);
+}
+
 mrpt::bayes::CParticleFilter::TParticleFilterOptions filterOptions(const LocalizationParams& p) {
   mrpt::bayes::CParticleFilter::TParticleFilterOptions o;
   o.PF_algorithm = mrpt::bayes::CParticleFilter::pfStandardProposal;
@@ -107,10 +142,12 @@ void Localizer::initPose(const CPose2D& pose, double std_x, double std_y, double
     part.log_w = 0;
   }
   initialised_ = true;
+  global_n_ = 0;
+  resetTracking();
   refreshEstimate();
   // A pose given with a tight spread counts as converged from the start, so
   // that a wrong one shows up as a loss.
-  converged_ = spread_ < p_.converged_spread;
+  converged_ = ever_converged_ = spread_ < p_.converged_spread;
 }
 
 void Localizer::initGlobal() { initUniform(free_cells_); }
@@ -134,8 +171,68 @@ void Localizer::initUniform(const std::vector<size_t>& cells) {
     part.log_w = 0;
   }
   initialised_ = true;
+  global_n_ = n;
+  resetTracking();
   refreshEstimate();
   converged_ = false;
+}
+
+void Localizer::resetTracking() {
+  converged_ = ever_converged_ = false;
+  pending_ = CPose2D();
+  if (rotate_open_) rotate_requests_.back().t_end = last_t_;
+  rotate_open_ = false;
+  stall_updates_ = 0;
+  stall_turn_ = 0;
+}
+
+size_t Localizer::globalCount() const {
+  return global_n_ > 0 ? global_n_
+                       : static_cast<size_t>(std::min(p_.global_particles, p_.particles_max));
+}
+
+Localizer::State Localizer::state() const {
+  if (converged_) return State::Tracking;
+  return ever_converged_ ? State::Lost : State::Converging;
+}
+
+// The robot turned `turned_rad` since the previous update, which ended at t.
+void Localizer::updateRotateRequest(double turned_rad, double t) {
+  if (!p_.rotate_request) return;
+  if (converged_) {
+    if (rotate_open_) {
+      rotate_requests_.back().t_end = t;
+      rotate_requests_.back().relocalised = true;
+      rotate_open_ = false;
+    }
+    stall_updates_ = 0;
+    stall_turn_ = 0;
+    return;
+  }
+  stall_turn_ += turned_rad;
+  const double limit = mrpt::DEG2RAD(p_.rotate_turn);
+  if (rotate_open_) {
+    // Turned a full rotate_turn since the request and still not converged:
+    // the request ends; another may follow after rotate_after_updates.
+    if (stall_turn_ >= limit) {
+      rotate_requests_.back().t_end = t;
+      rotate_open_ = false;
+      stall_updates_ = 0;
+      stall_turn_ = 0;
+    }
+    return;
+  }
+  ++stall_updates_;
+  if (stall_turn_ >= limit) {  // the robot is turning by itself: count afresh
+    stall_updates_ = 0;
+    stall_turn_ = 0;
+    return;
+  }
+  if (stall_updates_ >= static_cast<size_t>(p_.rotate_after_updates)) {
+    rotate_open_ = true;
+    rotate_requests_.push_back({t, std::nullopt, false});
+    stall_turn_ = 0;
+  }
 }
 
 void Localizer::refreshEstimate() {
@@ -150,19 +247,27 @@ CPose2D Localizer::pose() const { return mean_ + pending_; }
 size_t Localizer::particleCount() const { return mcl_.m_particles.size(); }
 
 size_t Localizer::inject(double fraction) {
+  // The share is taken of the global start's sample size (at least of the
+  // current one): a converged set is small (KLD), and a share of it alone
+  // would scatter too few random poses over a large map to ever find the
+  // robot again. As in AMCL, the set grows by the random particles (KLD
+  // shrinks it again once one hypothesis wins).
   const size_t n = mcl_.m_particles.size();
-  const auto k = static_cast<size_t>(std::lround(fraction * static_cast<double>(n)));
+  const size_t cap = static_cast<size_t>(p_.particles_max);
+  const size_t k = std::min(
+      cap, static_cast<size_t>(std::lround(
+               fraction * static_cast<double>(std::max(n, std::min(globalCount(), cap))))));
   if (k == 0) return 0;
+  const size_t keep = std::min(n, cap - k);
   // Equal weights first, so that the random particles are neither favoured
-  // nor drowned by the weights of the ones they replace.
-  bool uniform = true;
+  // nor drowned by the weights of the ones they join.
+  bool uniform = keep == n;
   for (const auto& part : mcl_.m_particles) uniform = uniform && part.log_w == 0;
-  if (!uniform) mcl_.performResampling(filterOptions(p_));
-  auto& rng = mrpt::random::getRandomGenerator();
-  for (size_t i = 0; i < k; ++i) {
-    auto& part = mcl_.m_particles[rng.drawUniform32bit() % mcl_.m_particles.size()];
-    part.d = randomFreePose();
-    part.log_w = 0;
+  if (!uniform) mcl_.performResampling(filterOptions(p_), keep);
+  mcl_.m_particles.resize(keep + k);
+  for (size_t i = keep; i < keep + k; ++i) {
+    mcl_.m_particles[i].d = randomFreePose();
+    mcl_.m_particles[i].log_w = 0;
   }
   return k;
 }
@@ -178,6 +283,7 @@ StepResult Localizer::step(const CPose2D& odometry,
                    (p_.update_min_d > 0 && moved >= p_.update_min_d) ||
                    (p_.update_min_a > 0 && turned >= p_.update_min_a);
   StepResult r;
+  last_t_ = t;
   if (due && scan) {
     const auto t0 = std::chrono::steady_clock::now();
     mrpt::obs::CActionRobotMovement2D act;
@@ -189,8 +295,10 @@ StepResult Localizer::step(const CPose2D& odometry,
     mm.gaussianModel.a2 = mrpt::RAD2DEG(p_.odom_a2);
     mm.gaussianModel.a3 = mrpt::DEG2RAD(p_.odom_a3);
     mm.gaussianModel.a4 = p_.odom_a4;
-    mm.gaussianModel.minStdXY = p_.odom_min_std_xy;
-    mm.gaussianModel.minStdPHI = mrpt::DEG2RAD(p_.odom_min_std_phi);
+    mm.gaussianModel.minStdXY =
+        converged_ ? p_.odom_min_std_xy : std::max(p_.odom_min_std_xy, p_.global_min_std_xy);
+    mm.gaussianModel.minStdPHI = mrpt::DEG2RAD(
+        converged_ ? p_.odom_min_std_phi : std::max(p_.odom_min_std_phi, p_.global_min_std_phi));
     act.computeFromOdometry(pending_, mm);
     act.timestamp = scan->timestamp;
     mrpt::obs::CActionCollection acts;
@@ -198,15 +306,41 @@ StepResult Localizer::step(const CPose2D& odometry,
     mrpt::obs::CSensoryFrame sf;
     sf.insert(scan);
 
-    const auto pfo = filterOptions(p_);
+    // Resampling (MRPT's KLD draw, which also sets the new sample size) only
+    // when the weights have degenerated: ESS ratio below resample_ess
+    // (Doucet, Godsill, Andrieu 2000, sec. II.C); otherwise every particle is
+    // moved and keeps its weight.
+    const CPose2D expected = mean_ + pending_;
+    auto pfo = filterOptions(p_);
+    const bool resample = mcl_.ESS() < p_.resample_ess;
+    pfo.adaptiveSampleSize = resample;
+    // While not converged, KLD keeps a share of the global start's particles.
+    mcl_.options.KLD_params.KLD_minSampleSize = static_cast<unsigned>(
+        converged_ ? p_.particles_min
+                   : std::max<double>(p_.particles_min, p_.global_keep * globalCount()));
+    std::vector<double> prior;  // log weights before the scan, same order as after
+    if (!resample) {
+      prior.reserve(mcl_.m_particles.size());
+      for (const auto& part : mcl_.m_particles) prior.push_back(part.log_w);
+    }
     mcl_.prediction_and_update(&acts, &sf, pfo);
-    // KLD sampling draws the new set from the old weights and gives every
-    // new particle log_w = 0 + log p(z|x): the mean likelihood is exact.
-    double lse = -std::numeric_limits<double>::infinity();
-    for (const auto& part : mcl_.m_particles) lse = logSumExp(lse, part.log_w);
-    const double log_w_avg = lse - std::log(static_cast<double>(mcl_.m_particles.size()));
+    const size_t n = mcl_.m_particles.size();
+    // A KLD draw gives every new particle log_w = 0 + log p(z|x).
+    std::vector<double> ll(n);
+    for (size_t i = 0; i < n; ++i) ll[i] = mcl_.m_particles[i].log_w - (resample ? 0.0 : prior[i]);
+    if (resample) prior.assign(n, 0.0);
+    double lse_prior = -std::numeric_limits<double>::infinity();
+    for (double a : prior) lse_prior = logSumExp(lse_prior, a);
+    for (double& a : prior) a -= lse_prior;  // sum of exp(prior) = 1
+    // Mean observation likelihood under the prior weights (untempered), for
+    // augmented MCL.
+    double log_w_avg = -std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < n; ++i) log_w_avg = logSumExp(log_w_avg, prior[i] + ll[i]);
+
+    r.beta = converged_ ? 1.0 : temperingExponent(prior, ll, p_.temper_ess, p_.temper_beta_min);
+    for (size_t i = 0; i < n; ++i) mcl_.m_particles[i].log_w = prior[i] + r.beta * ll[i];
     mcl_.normalizeWeights();
-    if (mcl_.ESS() < pfo.BETA) mcl_.performResampling(pfo);
+    r.resampled = resample;
 
     if (!averages_set_) {
       log_w_slow_ = log_w_fast_ = log_w_avg;
@@ -219,6 +353,10 @@ StepResult Localizer::step(const CPose2D& odometry,
     }
     r.likelihood_ratio = std::exp(log_w_fast_ - log_w_slow_);
     refreshEstimate();
+    // How far the estimate moved beyond what odometry explains.
+    const double jump = std::hypot(mean_.x() - expected.x(), mean_.y() - expected.y());
+    bool lost_now = false;
+    const double turned_rad = std::abs(pending_.phi());
     pending_ = CPose2D();
     first_update_done_ = true;
     ++updates_;
@@ -226,16 +364,24 @@ StepResult Localizer::step(const CPose2D& odometry,
     if (!convergence_time_ && spread_ < p_.converged_spread) convergence_time_ = t;
     if (!converged_ && spread_ < p_.converged_spread) {
       converged_ = true;
+      ever_converged_ = true;
       if (!events_.empty() && events_.back().kind == LocalizationEvent::Kind::Loss)
         events_.push_back({LocalizationEvent::Kind::Recovery, t, spread_});
-    } else if (converged_ && spread_ > p_.lost_spread) {
+    } else if (converged_ && (spread_ > p_.lost_spread || jump > p_.lost_spread)) {
+      // Lost: the cloud spread out, or it jumped (particles injected at
+      // another place took over: the old hypothesis was wrong and the new
+      // one is a single guess). Either way the filter searches globally again.
       converged_ = false;
-      events_.push_back({LocalizationEvent::Kind::Loss, t, spread_});
+      events_.push_back({LocalizationEvent::Kind::Loss, t, std::max(spread_, jump)});
+      lost_now = true;
     }
+
+    updateRotateRequest(turned_rad, t);
 
     if (p_.recovery) {
       const double fraction =
-          std::min(p_.max_inject_fraction, std::max(0.0, 1 - r.likelihood_ratio));
+          lost_now ? std::max(p_.lost_inject_fraction, 0.0)
+                   : std::min(p_.max_inject_fraction, std::max(0.0, 1 - r.likelihood_ratio));
       r.injected = inject(fraction);
       if (r.injected > 0) {
         ++injections_;
@@ -252,6 +398,7 @@ StepResult Localizer::step(const CPose2D& odometry,
   r.particles = particleCount();
   r.spread = spread_;
   if (!r.updated) r.likelihood_ratio = averages_set_ ? std::exp(log_w_fast_ - log_w_slow_) : 1;
+  r.rotate_in_place = rotate_open_;
   return r;
 }
 

@@ -29,6 +29,19 @@ struct LocalizationParams {
   double kld_delta = 0.01;       ///< KLD: probability that the bound is wrong
   double kld_epsilon = 0.01;     ///< KLD: largest KL divergence allowed
   double resample_ess = 0.5;     ///< resample when the effective sample size ratio falls below
+  /** Tempering while the filter has not converged: each scan's likelihood is
+   *  raised to the largest power beta <= 1 that keeps the effective sample
+   *  size at least this share of what it was before the scan (0: off). */
+  double temper_ess = 0.5;
+  double temper_beta_min = 1e-4;  ///< smallest tempering exponent
+  /** KLD lower bound while the filter has not converged (global phase), as a
+   *  share of the global start's sample size (0: particles_min only). */
+  double global_keep = 0.5;
+  /** While not converged, the motion noise is at least this (m, deg): the
+   *  copies a resampling makes of a hypothesis spread around it and climb to
+   *  the likelihood's peak (roughening, Gordon, Salmond, Smith 1993). */
+  double global_min_std_xy = 0.10;
+  double global_min_std_phi = 3;  ///< deg, see global_min_std_xy
   // likelihood field (MRPT's LF_Thrun)
   double lf_sigma = 0.20;         ///< m, standard deviation of a hit around the nearest obstacle
   double lf_max_corr_dist = 0.3;  ///< m, distances to the nearest obstacle are capped here
@@ -51,10 +64,19 @@ struct LocalizationParams {
   double alpha_slow = 0.05;          ///< decay of the long-term likelihood average
   double alpha_fast = 0.5;           ///< decay of the short-term likelihood average
   double max_inject_fraction = 0.3;  ///< largest share of particles replaced in one update
+  /** At a loss, random particles over the free space join the set: this share
+   *  of the global start's sample size (a global search restarts). */
+  double lost_inject_fraction = 0.5;
   // reporting
   double converged_spread = 0.3;  ///< m, converged when sqrt(var x + var y) falls below
-  double lost_spread = 1.0;       ///< m, a converged filter is lost when the spread exceeds
-  double free_threshold = 0.7;    ///< cells with p_free above are free (global start, injection)
+  double lost_spread =
+      1.0;  ///< m, a converged filter is lost when the spread or a jump of the estimate exceeds
+  double free_threshold = 0.7;  ///< cells with p_free above are free (global start, injection)
+  // "rotate in place to relocalise" (HOBBIT, seed 004): a request to the navigation layer
+  bool rotate_request = false;    ///< raise the request at all
+  int rotate_after_updates = 20;  ///< filter updates without convergence before a request
+  double rotate_turn = 360;       ///< deg: turned while not converged, the robot counts as turning;
+                                  ///< turned since the request, the request ends
   int seed = 1;  ///< seeds MRPT's global random generator when a Localizer is built
   static const ParamTable<LocalizationParams>& table();
 };

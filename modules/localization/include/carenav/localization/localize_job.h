@@ -46,6 +46,8 @@ struct UpdateRecord {
   size_t particles = 0;
   double spread = 0, likelihood_ratio = 1, seconds = 0;
   size_t injected = 0;
+  double beta = 1;         ///< power of the tempered likelihood
+  bool resampled = false;  ///< a new set was drawn (KLD) at this update
 };
 
 struct LocalizeJobResult {
@@ -54,6 +56,8 @@ struct LocalizeJobResult {
   std::vector<mrpt::math::CMatrixDouble33> covs;  ///< one per track pose
   std::vector<UpdateRecord> records;
   std::vector<LocalizationEvent> events;
+  std::vector<RotateRequest> rotate_requests;
+  bool rotate_enabled = false;
   std::optional<double> convergence_time;  ///< s since the first scan
   bool converged_at_end = false;
   double final_spread = 0;                  ///< m, particle spread after the last scan

@@ -28,6 +28,17 @@ struct LocalizationEvent {
   const char* name() const { return kind == Kind::Loss ? "loss" : "recovery"; }
 };
 
+/** A "rotate in place to relocalise" request to the navigation layer
+ *  (HOBBIT, seed 004): raised when the filter has not converged for
+ *  rotate_after_updates filter updates while the robot turned less than
+ *  rotate_turn; it ends when the filter converges or once the robot has turned
+ *  rotate_turn since the request. */
+struct RotateRequest {
+  double t_start = 0;           ///< time of the update that raised it
+  std::optional<double> t_end;  ///< time it ended (none: still open)
+  bool relocalised = false;     ///< it ended because the filter converged
+};
+
 /** What one step did. */
 struct StepResult {
   bool updated = false;             ///< the filter ran (motion thresholds reached)
@@ -37,6 +48,9 @@ struct StepResult {
   double spread = 0;                ///< m, sqrt(var x + var y)
   double likelihood_ratio = 1;      ///< w_fast / w_slow after the update
   size_t injected = 0;              ///< random particles added by recovery
+  double beta = 1;                  ///< power the scan likelihood was raised to (tempering)
+  bool resampled = false;           ///< the update drew a new set (KLD) before weighing
+  bool rotate_in_place = false;     ///< a rotate-in-place request is open after the step
   double seconds = 0;               ///< CPU time of the filter update
 };
 
@@ -45,7 +59,10 @@ struct StepResult {
  *  averages of the mean observation likelihood (w_fast, w_slow); after an
  *  update where w_fast/w_slow < 1, a share max(0, 1 - w_fast/w_slow) of the
  *  particles (at most max_inject_fraction) is replaced by random poses over
- *  the free cells. Not thread-safe; one instance per robot. */
+ *  the free cells. A new set is drawn (KLD) only when the effective sample
+ *  size ratio fell below resample_ess; until the filter has converged the
+ *  scan likelihood is tempered (temper_ess) and the sample size kept at
+ *  global_keep of the global start's. Not thread-safe; one instance per robot. */
 class Localizer {
  public:
   /** Copies the map. Throws InputError when it has no free cell. */
@@ -81,6 +98,17 @@ class Localizer {
   size_t particleCount() const;
   double spread() const { return spread_; }
   bool converged() const { return converged_; }
+  /** Converging (after an init, not yet converged), Tracking (converged) or
+   *  Lost (converged once, then the spread exceeded lost_spread). */
+  enum class State { Converging, Tracking, Lost };
+  State state() const;
+  /** True while a rotate-in-place request is open (rotate_request on): the
+   *  filter has not converged for rotate_after_updates updates and the robot
+   *  had not turned rotate_turn meanwhile. Navigation should stop and turn in
+   *  place until it goes false (converged, or rotate_turn turned). */
+  bool needsRotateInPlace() const { return rotate_open_; }
+  /** Every rotate-in-place request so far, the open one last. */
+  const std::vector<RotateRequest>& rotateRequests() const { return rotate_requests_; }
   /** Time of the first update whose spread fell below converged_spread. */
   std::optional<double> convergenceTime() const { return convergence_time_; }
   const std::vector<LocalizationEvent>& events() const { return events_; }
@@ -95,6 +123,9 @@ class Localizer {
   void initUniform(const std::vector<size_t>& cells);
   void refreshEstimate();
   size_t inject(double fraction);
+  void updateRotateRequest(double turned_rad, double t);
+  size_t globalCount() const;
+  void resetTracking();
 
   LocalizationParams p_;
   std::shared_ptr<mrpt::maps::COccupancyGridMap2D> map_;
@@ -111,6 +142,14 @@ class Localizer {
   std::optional<double> convergence_time_;
   std::vector<LocalizationEvent> events_;
   size_t updates_ = 0, injections_ = 0;
+  bool ever_converged_ = false;
+  size_t global_n_ = 0;  // sample size of the last global start (0: none)
+  // rotate-in-place request
+  bool rotate_open_ = false;
+  size_t stall_updates_ = 0;  // consecutive updates without convergence
+  double stall_turn_ = 0;     // rad turned during them (or since the open request)
+  std::vector<RotateRequest> rotate_requests_;
+  double last_t_ = 0;  // time of the latest step
 };
 
 }  // namespace carenav::localization
