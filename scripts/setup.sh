@@ -9,6 +9,8 @@ packages=(
   # MRPT libraries carenav links (no GUI: never mrpt-gui, -nanogui, -hwdrivers, -apps libs)
   libmrpt-config-dev libmrpt-io-dev libmrpt-serialization-dev libmrpt-obs-dev libmrpt-maps-dev
   libmrpt-slam-dev libmrpt-graphs-dev
+  # TP-space reactive navigation (PTGs + holonomic methods): the mrpt-ptg local planner (headless)
+  libmrpt-nav-dev
   # header-only use of its sparse Levenberg-Marquardt pose-graph optimiser (the library is not linked)
   libmrpt-graphslam-dev
   # MRPT's real datasets (/usr/share/mrpt/datasets): tests and the demo

@@ -78,6 +78,9 @@ void BM_PlannerCycle(benchmark::State& state, const char* plugin) {
 BENCHMARK_CAPTURE(BM_PlannerCycle, user_intent_dwa, "user-intent-dwa")
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_PlannerCycle, goal_dwa, "goal-dwa")->Unit(benchmark::kMillisecond);
+// MRPT's TP-space navigation (default [nav.mrpt_ptg]: C and alpha PTGs of
+// 121 paths, 3 m reference distance, CHolonomicFullEval with clearance).
+BENCHMARK_CAPTURE(BM_PlannerCycle, mrpt_ptg, "mrpt-ptg")->Unit(benchmark::kMillisecond);
 
 void BM_Supervisor(benchmark::State& state) {
   const auto nav = walkerNav();

@@ -7,6 +7,7 @@
 #include <carenav/navigation/bridge.h>
 #include <carenav/navigation/global_planner.h>
 #include <carenav/navigation/line_socket.h>
+#include <carenav/navigation/mrpt_ptg.h>
 #include <carenav/navigation/navigator.h>
 #include <carenav/places/places.h>
 
@@ -113,6 +114,7 @@ RunMetrics runBridge(const BridgeOptions& o) {
   Profile prof = Profile::load(o.profile);
   prof.applyOverrides(o.sets);
   prof.validate();
+  configureMrptPtg(prof);  // [nav.mrpt_ptg] for the mrpt-ptg plugin
   const auto robot = prof.section<RobotParams>("robot");
   const auto sensors = loadSensors(prof);
   auto nav = prof.section<NavigationParams>("navigation");
@@ -314,6 +316,8 @@ RunMetrics runBridge(const BridgeOptions& o) {
             loc->step(inc, scan, tn);
             const auto p = loc->pose();
             navigator.setMapPose({p.x(), p.y(), p.phi()});
+            // HOBBIT: localisation may ask for a turn in place to relocalise.
+            navigator.setRotateRequest(loc->needsRotateInPlace());
           }
           break;
         }

@@ -62,6 +62,76 @@ std::vector<TPoint2D> ObstacleMemory::points() const {
   return out;
 }
 
+// ---------------------------------------------------------------- free space
+
+int64_t FreeSpaceHistory::key(double x, double y) const {
+  const auto ix = static_cast<int64_t>(std::floor(x / res_));
+  const auto iy = static_cast<int64_t>(std::floor(y / res_));
+  return (ix << 32) ^ (iy & 0xffffffff);
+}
+
+void FreeSpaceHistory::markFree(double x, double y, double t) {
+  auto [it, fresh] = cells_.try_emplace(key(x, y), Stretch{t, t});
+  if (fresh) return;
+  // A hit since, or a gap longer than a second between sightings, starts a
+  // new stretch.
+  if (it->second.hit >= it->second.last || t - it->second.last > 1.0) it->second.first = t;
+  it->second.last = t;
+}
+
+void FreeSpaceHistory::markHit(double x, double y, double t) {
+  const auto it = cells_.find(key(x, y));
+  if (it != cells_.end()) it->second.hit = std::max(it->second.hit, t);
+}
+
+void FreeSpaceHistory::addScan(const WorldScan& s, double t) {
+  for (size_t i = 0; i < s.ends.size(); ++i) {
+    const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
+    const double len = std::hypot(dx, dy);
+    if (len <= 0) continue;
+    // Stop two cells short of a hit: the range noise must not free the
+    // obstacle's own cell.
+    const double stop = std::min((i < s.hit.size() && s.hit[i]) ? len - 2 * res_ : len, radius_);
+    int64_t last = 0;
+    bool any = false;
+    for (double d = std::max(s.range_min, 0.0); d < stop; d += res_) {
+      const double x = s.origin.x + dx * d / len, y = s.origin.y + dy * d / len;
+      const int64_t k = key(x, y);
+      if (any && k == last) continue;
+      markFree(x, y, t);
+      last = k;
+      any = true;
+    }
+  }
+  for (size_t i = 0; i < s.ends.size(); ++i)
+    if (i < s.hit.size() && s.hit[i]) markHit(s.ends[i].x, s.ends[i].y, t);
+}
+
+bool FreeSpaceHistory::recentlyFree(double x, double y, double now, double window,
+                                    double min_free) const {
+  const auto it = cells_.find(key(x, y));
+  if (it == cells_.end()) return false;
+  return now - it->second.last <= window && it->second.last - it->second.first >= min_free;
+}
+
+bool FreeSpaceHistory::movedIn(double x, double y, double now, double window,
+                               double min_free) const {
+  if (!recentlyFree(x, y, now, window, min_free)) return false;
+  int around = 0;
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx)
+      if ((dx || dy) && recentlyFree(x + dx * res_, y + dy * res_, now, window, min_free)) ++around;
+  return around >= 7;
+}
+
+void FreeSpaceHistory::prune(double now, double keep) {
+  for (auto it = cells_.begin(); it != cells_.end();)
+    if (now - it->second.last > keep)
+      it = cells_.erase(it);
+    else
+      ++it;
+}
+
 // ---------------------------------------------------------------- footprint
 
 namespace {
@@ -223,6 +293,26 @@ void LocalCostmap::build(const TPoint2D& c, const std::vector<TPoint2D>& obstacl
   for (size_t i = 0; i < d2.size(); ++i)
     dist_[i] =
         std::isinf(d2[i]) ? static_cast<float>(far_) : static_cast<float>(std::sqrt(d2[i]) * res_);
+}
+
+void LocalCostmap::addMoving(const std::vector<TPoint2D>& moving, double inflation) {
+  moving_cells_ = 0;
+  if (moving.empty()) return;
+  std::vector<uint8_t> free(static_cast<size_t>(n_) * n_, 1);
+  for (const auto& o : moving) {
+    const int ix = cellX(o.x), iy = cellY(o.y);
+    if (ix < 0 || iy < 0 || ix >= n_ || iy >= n_) continue;
+    uint8_t& f = free[static_cast<size_t>(iy) * n_ + ix];
+    moving_cells_ += f;
+    f = 0;
+  }
+  if (!moving_cells_) return;
+  const auto d2 = squaredDistanceTransform(free, n_, n_);
+  for (size_t i = 0; i < d2.size(); ++i) {
+    if (std::isinf(d2[i])) continue;
+    const double d = std::max(0.0, std::sqrt(d2[i]) * res_ - inflation);
+    if (d < dist_[i]) dist_[i] = static_cast<float>(d);
+  }
 }
 
 bool LocalCostmap::inside(double x, double y) const {

@@ -1,5 +1,6 @@
 #include <carenav/common/errors.h>
 #include <carenav/navigation/local_planner.h>
+#include <carenav/navigation/mrpt_ptg.h>
 
 #include <algorithm>
 #include <cmath>
@@ -130,6 +131,8 @@ PlannerRegistry::PlannerRegistry() {
       "walker shared control (seed 000 Alg. 4, Eq. 4.10): the user's (v, w) unless unsafe",
       makeUserIntentDwa);
   add("goal-dwa", "dynamic window towards the next waypoint of the global route", makeGoalDwa);
+  add("mrpt-ptg", mrptPtgDescription(),
+      [](const NavigationParams& p, const RobotParams& r) { return makeMrptPtg(p, r); });
 }
 
 PlannerRegistry& PlannerRegistry::instance() {

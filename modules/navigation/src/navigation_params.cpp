@@ -1,4 +1,5 @@
 #include <carenav/common/profile.h>
+#include <carenav/navigation/mrpt_ptg.h>
 #include <carenav/navigation/navigation_params.h>
 
 namespace carenav::navigation {
@@ -7,8 +8,9 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
   using P = NavigationParams;
   static const auto t =
       ParamTable<P>()
-          .choice("plugin", &P::plugin, {"user-intent-dwa", "goal-dwa"},
-                  "local method: user-intent-dwa (walker shared control) or goal-dwa")
+          .choice("plugin", &P::plugin, {"user-intent-dwa", "goal-dwa", "mrpt-ptg"},
+                  "local method: user-intent-dwa (walker shared control), goal-dwa or mrpt-ptg "
+                  "(MRPT's TP-space navigation, [nav.mrpt_ptg])")
           .real("sim_time", &P::sim_time, "s", 0.1, 30,
                 "horizon of each sampled trajectory (seed 000 Table 5.1: 7.0)")
           .real("sim_step", &P::sim_step, "s", 0.01, 1, "rollout step (seed 000: 0.1)")
@@ -45,6 +47,14 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
                 "seen obstacles are remembered this long (seed 004: about 5)")
           .real("memory_radius", &P::memory_radius, "m", 0.5, 50,
                 "remembered obstacles farther from the robot are dropped")
+          .real("predict_speed", &P::predict_speed, "m/s", 0, 3,
+                "moving obstacles (people) are grown by predict_speed x predict_time; 0: off")
+          .real("predict_time", &P::predict_time, "s", 0, 5,
+                "look-ahead of the growth of moving obstacles")
+          .real("dynamic_window", &P::dynamic_window, "s", 0.1, 10,
+                "an obstacle in a cell seen free this recently counts as moving")
+          .real("dynamic_min_free", &P::dynamic_min_free, "s", 0, 10,
+                "... when the cell had been seen free for at least this long")
           .real("cost_decay", &P::cost_decay, "m", 0.01, 5,
                 "cell cost falls from 100 to 0 over this distance to an obstacle")
           .real("footprint_padding", &P::footprint_padding, "m", 0, 1,
@@ -77,6 +87,9 @@ void registerProfileSections() {
   ProfileSchemas::instance().add(SectionSchema::of(
       NavigationParams::table(), "navigation",
       "local planners (dynamic window plugins), obstacle memory, global route, safety"));
+  ProfileSchemas::instance().add(SectionSchema::of(
+      MrptPtgParams::table(), "nav.mrpt_ptg",
+      "mrpt-ptg local planner: MRPT's TP-space reactive navigation (PTGs, holonomic method)"));
 }
 
 }  // namespace carenav::navigation

@@ -18,7 +18,8 @@ Navigator::Navigator(const NavigationParams& p, const RobotParams& robot)
       supervisor_(p, robot),
       footprint_(robot.footprint, p.resolution),
       map_(p, footprint_),
-      memory_(p.resolution, p.obstacle_persistence, p.memory_radius) {}
+      memory_(p.resolution, p.obstacle_persistence, p.memory_radius),
+      free_history_(p.resolution, p.memory_radius) {}
 
 void Navigator::setOdometry(const TPose2D& pose, const Twist& measured, double t) {
   odom_ = pose;
@@ -82,6 +83,11 @@ bool Navigator::addObservation(const mrpt::obs::CObservation& obs, const TPose2D
       ws.hit.push_back(r < max_range - 1e-3 ? 1 : 0);
     }
     memory_.add(ws, t);
+    if (p_.predict_speed * p_.predict_time > 0) {
+      free_history_.addScan(ws, t);
+      for (size_t i = 0; i < ws.ends.size(); ++i)
+        if (ws.hit[i]) fresh_hits_.push_back(ws.ends[i]);
+    }
     scan_t_ = t;
     return true;
   }
@@ -103,6 +109,8 @@ bool Navigator::addObservation(const mrpt::obs::CObservation& obs, const TPose2D
         ws.ends.push_back({end.x(), end.y()});
         ws.hit.push_back(hit ? 1 : 0);
       }
+      // A range array's cone does not say where across it the return is:
+      // its hits never count as moving (no free-space history from them).
       memory_.add(ws, t);
     }
     scan_t_ = t;
@@ -164,6 +172,22 @@ Navigator::Cycle Navigator::cycle(double now) {
   std::vector<TPoint2D> obstacles = memory_.points();
   obstacles.insert(obstacles.end(), perceived_.begin(), perceived_.end());
   map_.build({odom_.x, odom_.y}, obstacles);
+  // Moving obstacles (people): obstacle cells that were free just before,
+  // grown by how far a person walks in predict_time.
+  moving_.clear();
+  const double grow = p_.predict_speed * p_.predict_time;
+  if (grow > 0) {
+    free_history_.prune(now, p_.dynamic_window + 1.0);
+    // Only what locates its obstacles precisely and is current: the lidar
+    // hits since the last cycle. (The perception grid's occupied cells are
+    // not used: the edge cells of a static box turn from free to occupied as
+    // the robot approaches it and the box would be taken for a person.)
+    for (const auto& o : fresh_hits_)
+      if (free_history_.movedIn(o.x, o.y, now, p_.dynamic_window, p_.dynamic_min_free))
+        moving_.push_back(o);
+    fresh_hits_.clear();
+    map_.addMoving(moving_, grow);
+  }
   c.obstacles = memory_.size();
   c.clearance = map_.check(odom_, 2.0).clearance;
 

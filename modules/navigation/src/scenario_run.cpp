@@ -6,6 +6,7 @@
 #include <carenav/io/map_render.h>
 #include <carenav/localization/localizer.h>
 #include <carenav/navigation/global_planner.h>
+#include <carenav/navigation/mrpt_ptg.h>
 #include <carenav/navigation/navigator.h>
 #include <carenav/navigation/scenario.h>
 #include <carenav/perception/pipeline.h>
@@ -115,6 +116,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   Profile prof = Profile::load(profile_path);
   prof.applyOverrides(o.sets);
   prof.validate();
+  configureMrptPtg(prof);  // [nav.mrpt_ptg] for the mrpt-ptg plugin
   const auto robot = prof.section<RobotParams>("robot");
   const auto sensors = loadSensors(prof);
   auto nav = prof.section<NavigationParams>("navigation");
@@ -271,6 +273,8 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
           loc->step(inc, std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs), f.t);
           const auto p = loc->pose();
           navigator.setMapPose({p.x(), p.y(), p.phi()});
+          // HOBBIT: localisation may ask for a turn in place to relocalise.
+          navigator.setRotateRequest(loc->needsRotateInPlace());
         }
       }
     }

@@ -2,6 +2,8 @@
 // turning in place when localisation asks for it (HOBBIT, seed 004).
 #include <carenav/navigation/navigator.h>
 
+#include <mrpt/obs/CObservation2DRangeScan.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -81,4 +83,87 @@ TEST(Navigator, AWalkerIgnoresTheRotateRequest) {
   n.setRotateRequest(true);
   const auto c = n.cycle(1.0);
   EXPECT_GT(c.decision.cmd.v, 0.0) << "the user drives a walker: " << c.plan.note;
+}
+
+// ------------------------------------------------- moving obstacles (people)
+
+TEST(FreeSpaceHistoryTest, AnObstacleWhereFreeSpaceWasIsMovingAWallIsNot) {
+  FreeSpaceHistory h(0.05, 5.0);
+  // Ten scans see the floor at (1, 0) free.
+  for (int k = 0; k < 10; ++k) h.markFree(1.0, 0.0, 0.1 * k);
+  EXPECT_TRUE(h.recentlyFree(1.0, 0.0, 1.0, 1.5, 0.3)) << "a person stepping in there moves";
+  EXPECT_FALSE(h.recentlyFree(1.0, 0.0, 3.0, 1.5, 0.3)) << "standing 2 s later: static";
+  // A wall's edge cell flickers: free, hit, free, hit... never a stretch.
+  for (int k = 0; k < 10; ++k) {
+    if (k % 2)
+      h.markHit(2.0, 0.0, 0.1 * k);
+    else
+      h.markFree(2.0, 0.0, 0.1 * k);
+  }
+  EXPECT_FALSE(h.recentlyFree(2.0, 0.0, 1.0, 1.5, 0.3));
+  EXPECT_FALSE(h.recentlyFree(3.0, 0.0, 1.0, 1.5, 0.3)) << "never seen";
+}
+
+namespace {
+
+/** A 2D lidar scan at the robot's origin: 181 beams over 180 deg hitting a
+ *  wall at x = 3 m, and the obstacle `blob_x` ahead across |y| < 0.15 m when
+ *  `blob` is set. */
+mrpt::obs::CObservation2DRangeScan scanWith(bool blob, double blob_x) {
+  mrpt::obs::CObservation2DRangeScan s;
+  s.aperture = static_cast<float>(M_PI);
+  s.rightToLeft = true;
+  s.maxRange = 10;
+  s.resizeScan(181);
+  for (size_t i = 0; i < 181; ++i) {
+    const double a = -M_PI / 2 + M_PI * static_cast<double>(i) / 180;
+    double r = std::abs(std::cos(a)) > 0.2 ? 3.0 / std::cos(a) : 9.0;
+    if (r < 0) r = 9.0;
+    if (blob && std::cos(a) > 0 && std::abs(blob_x * std::tan(a)) < 0.15) r = blob_x / std::cos(a);
+    s.setScanRange(i, static_cast<float>(std::min(r, 9.0)));
+    s.setScanRangeValidity(i, true);
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(Navigator, APersonSteppingIntoTheWayStopsTheRobotEarlierThanABox) {
+  // The same obstacle 0.6 m ahead of the front: stepping in where the lidar
+  // saw free floor (a person), it is grown by predict_speed x predict_time and
+  // the robot must not drive on as fast; a box that was always there leaves room.
+  auto run = [](bool seen_free_before) {
+    Navigator n(goalParams(), longRobot());
+    n.setRoute({{0, 0}, {5, 0}}, {5, 0, 0});
+    for (int k = 0; k < 10; ++k) {
+      const double t = 0.1 * k;
+      n.setOdometry({0, 0, 0}, {0, 0}, t);
+      n.addObservation(scanWith(!seen_free_before, 1.1), {0, 0, 0}, t);
+      n.cycle(t);
+    }
+    n.setOdometry({0, 0, 0}, {0.3, 0}, 1.0);
+    n.addObservation(scanWith(true, 1.1), {0, 0, 0}, 1.0);
+    const auto c = n.cycle(1.0);
+    return std::make_pair(c, n.moving().size());
+  };
+  const auto [box, box_moving] = run(false);
+  const auto [person, person_moving] = run(true);
+  EXPECT_EQ(box_moving, 0u);
+  EXPECT_GE(person_moving, 3u);
+  EXPECT_GT(box.decision.cmd.v, 0.05) << "0.6 m of room before a static box: " << box.plan.note;
+  EXPECT_LT(person.decision.cmd.v, box.decision.cmd.v) << person.plan.note;
+  // With prediction off the person is just another obstacle.
+  NavigationParams off = goalParams();
+  off.predict_speed = 0;
+  Navigator n(off, longRobot());
+  n.setRoute({{0, 0}, {5, 0}}, {5, 0, 0});
+  for (int k = 0; k < 10; ++k) {
+    n.setOdometry({0, 0, 0}, {0, 0}, 0.1 * k);
+    n.addObservation(scanWith(false, 1.1), {0, 0, 0}, 0.1 * k);
+    n.cycle(0.1 * k);
+  }
+  n.setOdometry({0, 0, 0}, {0.3, 0}, 1.0);
+  n.addObservation(scanWith(true, 1.1), {0, 0, 0}, 1.0);
+  n.cycle(1.0);
+  EXPECT_TRUE(n.moving().empty());
 }

@@ -53,6 +53,43 @@ class ObstacleMemory {
   std::unordered_map<int64_t, double> cells_;  // cell -> last time seen
 };
 
+/** Where free space was seen recently (ray clearing of scans, free cells of
+ *  a perception grid), per cell: the start and end of its latest stretch
+ *  of being seen free. An obstacle in a cell whose free stretch ended
+ *  recently, after lasting a while, has moved in: a person, not a wall
+ *  (walls are never seen free; noise flickers too briefly). */
+class FreeSpaceHistory {
+ public:
+  FreeSpaceHistory(double resolution, double radius) : res_(resolution), radius_(radius) {}
+  void markFree(double x, double y, double t);
+  /** An obstacle seen in the cell: a later sighting of free space starts a
+   *  new stretch (cells at the edge of a wall flicker; they never build a
+   *  stretch long enough to count). */
+  void markHit(double x, double y, double t);
+  /** The rays of a scan, up to one cell before each hit, within `radius`
+   *  of the sensor. */
+  void addScan(const WorldScan& scan, double t);
+  /** The cell was seen free for at least `min_free` seconds, ending at most
+   *  `window` seconds before `now`. */
+  bool recentlyFree(double x, double y, double now, double window, double min_free) const;
+  /** Something moved into open space: the cell and at least 7 of its 8
+   *  neighbours were recently free. (The edge cell of a static obstacle
+   *  can look free to grazing rays while its neighbours are the obstacle's
+   *  own cells, never seen free.) */
+  bool movedIn(double x, double y, double now, double window, double min_free) const;
+  void prune(double now, double keep);
+  size_t size() const { return cells_.size(); }
+
+ private:
+  int64_t key(double x, double y) const;
+  double res_, radius_;
+  struct Stretch {
+    double first = 0, last = 0;
+    double hit = -1e300;
+  };
+  std::unordered_map<int64_t, Stretch> cells_;
+};
+
 /** The robot's footprint with what the queries need. */
 struct Footprint {
   std::vector<Point2> polygon;     ///< robot frame, m
@@ -89,6 +126,11 @@ class LocalCostmap {
   void build(const TPoint2D& centre, const std::vector<TPoint2D>& obstacles,
              const mrpt::maps::COccupancyGridMap2D* static_map = nullptr,
              double static_occupied = 0.65);
+  /** Grows moving obstacles (world frame) by `inflation` metres on the map
+   *  built last: the distance of a cell becomes the smaller of its distance
+   *  to the static ones and its distance to a moving one less `inflation`. */
+  void addMoving(const std::vector<TPoint2D>& moving, double inflation);
+  size_t movingCells() const { return moving_cells_; }
 
   bool inside(double x, double y) const;
   /** m, from (x, y) to the nearest obstacle cell centre; `farValue()` when
@@ -115,7 +157,7 @@ class LocalCostmap {
   int n_ = 0;
   double x0_ = 0, y0_ = 0;   // world coordinates of cell (0, 0)'s lower-left corner
   std::vector<float> dist_;  // metres
-  size_t obstacle_cells_ = 0;
+  size_t obstacle_cells_ = 0, moving_cells_ = 0;
   Footprint fp_;
 };
 

@@ -129,5 +129,9 @@ std::unique_ptr<LocalPlanner> makeUserIntentDwa(const NavigationParams& p, const
 /** Goal-directed DWA: heading to the next waypoint, clearance, speed,
  *  distance to the route; turns in place when the waypoint is far off. */
 std::unique_ptr<LocalPlanner> makeGoalDwa(const NavigationParams& p, const RobotParams& r);
+/** MRPT's TP-space reactive navigation (PTGs + a holonomic method) towards
+ *  the route, with the default [nav.mrpt_ptg] parameters (see mrpt_ptg.h for
+ *  the parameters and configureMrptPtg). Goal-only: it ignores user intent. */
+std::unique_ptr<LocalPlanner> makeMrptPtg(const NavigationParams& p, const RobotParams& r);
 
 }  // namespace carenav::navigation

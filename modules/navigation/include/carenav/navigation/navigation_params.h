@@ -46,6 +46,12 @@ struct NavigationParams {
   double memory_radius = 3.0;         ///< m, remembered obstacles farther away are dropped
   double cost_decay = 0.3;            ///< m, cell cost falls from 100 to 0 over this clearance
   double footprint_padding = 0.02;    ///< m, closer than this to an obstacle counts as contact
+  // Moving obstacles (people): an obstacle in a cell seen free just before
+  // is taken to be moving and grown by how far a person walks meanwhile.
+  double predict_speed = 0.5;     ///< m/s, assumed speed of a moving obstacle (0: no prediction)
+  double predict_time = 1.0;      ///< s, look-ahead of that growth (inflation = speed x time)
+  double dynamic_window = 1.5;    ///< s, a cell seen free this recently and now occupied is moving
+  double dynamic_min_free = 0.3;  ///< s, ... after being seen free for at least this long
   // Global route (A* on the inflated static map)
   double plan_clearance = 0.1;  ///< m, extra clearance kept by the route beyond the footprint
   double plan_cost_weight = 2;  ///< extra route cost per metre near obstacles (keeps paths central)

@@ -73,6 +73,8 @@ class Navigator {
   const LocalPlanner& planner() const { return *planner_; }
   const ObstacleMemory& memory() const { return memory_; }
   const std::vector<TPoint2D>& perceived() const { return perceived_; }
+  /** The obstacle cells taken as moving in the last cycle (odometry frame). */
+  const std::vector<TPoint2D>& moving() const { return moving_; }
   TPose2D odomPose() const { return odom_; }
   /** Pose of the robot in the map frame (odometry pose corrected by the latest localisation). */
   TPose2D mapPose() const;
@@ -91,6 +93,9 @@ class Navigator {
   Footprint footprint_;
   LocalCostmap map_;
   ObstacleMemory memory_;
+  FreeSpaceHistory free_history_;
+  std::vector<TPoint2D> moving_;
+  std::vector<TPoint2D> fresh_hits_;  // lidar hits since the last cycle (odometry frame)
   TPose2D odom_;
   Twist measured_;
   std::optional<double> odom_t_, scan_t_, intent_t_;
