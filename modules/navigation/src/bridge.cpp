@@ -387,16 +387,11 @@ RunMetrics runBridge(const BridgeOptions& o) {
       m.min_clearance_m = std::min(m.min_clearance_m, cyc.clearance);
       clear_sum += cyc.clearance;
     }
-    if (walker && user) {
-      const Twist uc{std::clamp(user->v, robot.v_min, robot.v_max),
-                     std::clamp(user->w, -robot.w_max, robot.w_max)};
-      const Trajectory ut = rollout(navigator.costmap(), navigator.odomPose(), uc, nav.sim_time,
-                                    nav.sim_step, nav.clearance_influence);
-      if (ut.admissible() && std::abs(uc.v) >= nav.intent_deadband) {
-        fid_sum += std::hypot(cyc.decision.cmd.v - uc.v, cyc.decision.cmd.w - uc.w);
+    if (walker && user)
+      if (const auto d = navigator.intentDeviation(*user, cyc.decision.cmd)) {
+        fid_sum += *d;
         ++fid_n;
       }
-    }
     if (log.is_open()) {
       const TPose2D est = navigator.mapPose();
       log << fmt(t) << "," << fmt(robot_t) << "," << fmt(odom.x) << "," << fmt(odom.y) << ","

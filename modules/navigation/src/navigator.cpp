@@ -5,6 +5,7 @@
 #include <mrpt/poses/CPoint2D.h>
 #include <mrpt/poses/CPose2D.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace carenav::navigation {
@@ -164,6 +165,15 @@ PlannerOutput Navigator::turnInPlace(const PlannerInput& in) const {
   }
   out.note = out.ok ? "turn in place to relocalise" : "cannot turn in place to relocalise";
   return out;
+}
+
+std::optional<double> Navigator::intentDeviation(const Twist& user, const Twist& cmd) const {
+  const Twist uc{std::clamp(user.v, robot_.v_min, robot_.v_max),
+                 std::clamp(user.w, -robot_.w_max, robot_.w_max)};
+  if (std::abs(uc.v) < p_.intent_deadband) return std::nullopt;
+  const Trajectory ut = rollout(map_, odom_, uc, p_.sim_time, p_.sim_step, p_.clearance_influence);
+  if (!ut.admissible()) return std::nullopt;
+  return std::hypot(cmd.v - uc.v, cmd.w - uc.w);
 }
 
 Navigator::Cycle Navigator::cycle(double now) {

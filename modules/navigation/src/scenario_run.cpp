@@ -356,17 +356,12 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     if (sc.reach &&
         std::hypot(truth.x - sc.reach->first.x, truth.y - sc.reach->first.y) <= sc.reach->second)
       reached = true;
-    if (walker && user) {
-      // Fidelity where the user's own command is free of collisions.
-      const Twist uc{std::clamp(user->v, robot.v_min, robot.v_max),
-                     std::clamp(user->w, -robot.w_max, robot.w_max)};
-      const Trajectory ut = rollout(navigator.costmap(), navigator.odomPose(), uc, nav.sim_time,
-                                    nav.sim_step, nav.clearance_influence);
-      if (ut.admissible() && std::abs(uc.v) >= nav.intent_deadband) {
-        fid_sum += std::hypot(cyc.decision.cmd.v - uc.v, cyc.decision.cmd.w - uc.w);
+    // Fidelity where the user's own command is free of collisions.
+    if (walker && user)
+      if (const auto d = navigator.intentDeviation(*user, cyc.decision.cmd)) {
+        fid_sum += *d;
         ++fid_n;
       }
-    }
     if (log.is_open()) {
       const TPose2D est = navigator.mapPose();
       log << fmt(t) << "," << fmt(truth.x) << "," << fmt(truth.y) << "," << fmt(truth.yaw, 4) << ","

@@ -69,6 +69,13 @@ class Navigator {
   };
   Cycle cycle(double now);
 
+  /** The walker's intent fidelity term of one cycle (seed 002 sec. 6.1):
+   *  |cmd - user| in (m/s, rad/s) when the user's own command (within the
+   *  robot's limits, above the deadband) is free of collisions over the
+   *  horizon on the current cost map; nullopt otherwise (then deviating is
+   *  the point). */
+  std::optional<double> intentDeviation(const Twist& user, const Twist& cmd) const;
+
   const LocalCostmap& costmap() const { return map_; }
   const LocalPlanner& planner() const { return *planner_; }
   const ObstacleMemory& memory() const { return memory_; }
