@@ -51,11 +51,7 @@ void onSigint(int) { g_stop = true; }
 
 /** "x,y,deg" to a pose; throws InputError naming the option. */
 navigation::TPose2D parsePose(const std::string& s, const char* option) {
-  double x, y, deg;
-  char c1, c2, extra;
-  std::istringstream in(s);
-  if ((in >> x >> c1 >> y >> c2 >> deg) && c1 == ',' && c2 == ',' && !(in >> extra))
-    return navigation::TPose2D{x, y, mrpt::DEG2RAD(deg)};
+  if (const auto p = navigation::parsePoseText(s)) return *p;
   throw InputError(std::string(option) + " '" + s + "': expected x,y,deg");
 }
 

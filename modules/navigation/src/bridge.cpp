@@ -142,12 +142,8 @@ RunMetrics runBridge(const BridgeOptions& o) {
       throw InputError("--goal: plugin " + nav.plugin + " follows its user; use a goal plugin");
     if (!grid || !o.start)
       throw InputError("--goal with --bridge needs --map and --start (where the robot is on it)");
-    double x, y, deg;
-    char c1, c2, extra;
-    std::istringstream in(o.goal);
-    if ((in >> x >> c1 >> y >> c2 >> deg) && c1 == ',' && c2 == ',' && !(in >> extra)) {
-      goal = TPose2D{x, y, mrpt::DEG2RAD(deg)};
-    } else {
+    goal = parsePoseText(o.goal);
+    if (!goal) {
       const places::Goal g = places::resolveGoal(
           places::readPlacesFile(places::placesPathForMap(o.map)), *grid, o.goal);
       goal = TPose2D{g.x, g.y, mrpt::DEG2RAD(g.heading_deg)};

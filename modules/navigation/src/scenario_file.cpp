@@ -18,6 +18,16 @@ namespace carenav::navigation {
 namespace fs = std::filesystem;
 using yaml::Node;
 
+std::optional<TPose2D> parsePoseText(const std::string& text) {
+  double x, y, deg;
+  char c1, c2, extra;
+  std::istringstream in(text);
+  if ((in >> x >> c1 >> y >> c2 >> deg) && c1 == ',' && c2 == ',' && !(in >> extra) &&
+      std::isfinite(x) && std::isfinite(y) && std::isfinite(deg))
+    return TPose2D{x, y, mrpt::DEG2RAD(deg)};
+  return std::nullopt;
+}
+
 std::optional<std::pair<double, double>> Scenario::userAt(double t, double yaw) const {
   const IntentEntry* e = nullptr;
   for (const auto& i : intent)

@@ -101,13 +101,8 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
       throw InputError(sc.file + ": --goal given for a scenario that scripts a user (intent)");
     sc.goal.reset();
     sc.goal_name.clear();
-    double x, y, deg;
-    char c1, c2, extra;
-    std::istringstream in(o.goal);
-    if ((in >> x >> c1 >> y >> c2 >> deg) && c1 == ',' && c2 == ',' && !(in >> extra))
-      sc.goal = TPose2D{x, y, mrpt::DEG2RAD(deg)};
-    else
-      sc.goal_name = o.goal;
+    sc.goal = parsePoseText(o.goal);
+    if (!sc.goal) sc.goal_name = o.goal;
   }
   // Profile: --profile, else the scenario's.
   const std::string profile_path = !o.profile.empty() ? o.profile : sc.profile;

@@ -7,20 +7,12 @@
 
 #include <cmath>
 
+#include "fixtures.h"
+
 namespace carenav::navigation {
 namespace {
 
-RobotParams walkerRobot() {
-  RobotParams r;
-  r.footprint = {{0.25, 0.325}, {-0.45, 0.325}, {-0.45, -0.325}, {0.25, -0.325}};
-  r.v_max = 0.3;
-  r.v_min = -0.15;
-  r.w_max = 0.75;
-  r.acc_v = 0.5;
-  r.acc_w = 1.0;
-  r.safe_distance = 0.325;
-  return r;
-}
+using test::walkerRobot;
 
 NavigationParams walkerNav() {
   NavigationParams p;

@@ -62,6 +62,10 @@ Scenario readScenario(const std::string& path);
 Scenario parseScenario(const std::string& text, const std::string& origin,
                        const std::string& base_dir);
 
+/** "x,y,deg" (metres, degrees) as a pose; nullopt for any other text (a
+ *  goal given by place name, or a typo the caller reports). */
+std::optional<TPose2D> parsePoseText(const std::string& text);
+
 /** Metrics of one run (seed 002 sec. 6.1). */
 struct RunMetrics {
   std::string scenario, plugin;
