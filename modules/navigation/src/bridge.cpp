@@ -131,6 +131,7 @@ RunMetrics runBridge(const BridgeOptions& o) {
   std::optional<mrpt::maps::COccupancyGridMap2D> grid;
   std::optional<TPose2D> goal;
   std::optional<Route> route;
+  RouteReplanner replanner(o.control_rate);
   std::unique_ptr<localization::Localizer> loc;
   std::string loc_sensor;
   for (const auto& [label, s] : lidars)
@@ -410,11 +411,11 @@ RunMetrics runBridge(const BridgeOptions& o) {
       end_reason = "goal reached";
       break;
     }
-    if (goal && grid && k > 0 && k % static_cast<size_t>(2 * o.control_rate) == 0) {
+    if (goal && grid && replanner.due(k, !navigator.predicted().empty())) {
       const TPose2D mp = navigator.mapPose();
-      if (auto r2 =
-              replanAroundSeen(*grid, navigator.obstaclesInMap(), {mp.x, mp.y}, {goal->x, goal->y},
-                               route, fp.inscribed, fp.circumscribed + 0.2, nav)) {
+      if (auto r2 = replanner.step(!navigator.predicted().empty(), *grid,
+                                   navigator.obstaclesInMap(), {mp.x, mp.y}, {goal->x, goal->y},
+                                   route, fp.inscribed, fp.circumscribed + 0.2, nav)) {
         route = r2;
         navigator.setRoute(routeFrom({mp.x, mp.y}), *goal);
       }

@@ -259,4 +259,22 @@ std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map
   return std::nullopt;
 }
 
+bool RouteReplanner::due(size_t k, bool people) const {
+  const auto every =
+      static_cast<size_t>(std::max(1.0, std::round((people || detour_ ? 0.5 : 2.0) * rate_)));
+  return k > 0 && k % every == 0;
+}
+
+std::optional<Route> RouteReplanner::step(bool people, const mrpt::maps::COccupancyGridMap2D& map,
+                                          const std::vector<TPoint2D>& seen, const TPoint2D& from,
+                                          const TPoint2D& goal, const std::optional<Route>& route,
+                                          double robot_radius, double skip,
+                                          const NavigationParams& p) {
+  const bool fresh = detour_ && !people;  // the person is gone: plan anew
+  auto r =
+      replanAroundSeen(map, seen, from, goal, fresh ? std::nullopt : route, robot_radius, skip, p);
+  if (r) detour_ = people;
+  return r;
+}
+
 }  // namespace carenav::navigation

@@ -29,7 +29,8 @@ double distanceToPath(const std::vector<TPoint2D>& path, double x, double y) {
 
 class GoalDwa final : public LocalPlanner {
  public:
-  GoalDwa(const NavigationParams& p, const RobotParams& r) : p_(p), r_(r) {}
+  GoalDwa(const NavigationParams& p, const RobotParams& r)
+      : p_(p), r_(r), corner_(p.corner_deg > 0 ? mrpt::DEG2RAD(p.corner_deg) : M_PI) {}
   std::string name() const override { return "goal-dwa"; }
   bool needsUserIntent() const override { return false; }
 
@@ -57,7 +58,7 @@ class GoalDwa final : public LocalPlanner {
       }
       turn_only = true;
     } else {
-      const TPoint2D t = lookaheadPoint(path, in.pose.x, in.pose.y, p_.lookahead);
+      const TPoint2D t = lookaheadPoint(path, in.pose.x, in.pose.y, p_.lookahead, corner_);
       target_heading = std::atan2(t.y - in.pose.y, t.x - in.pose.x);
       turn_only =
           std::abs(angleDiff(target_heading, in.pose.phi)) > mrpt::DEG2RAD(p_.turn_in_place_deg);
@@ -88,7 +89,7 @@ class GoalDwa final : public LocalPlanner {
           if (in.goal && to_goal < p_.goal_tolerance)
             heading_err = std::abs(angleDiff(target_heading, e.phi));
           else {
-            const TPoint2D t = lookaheadPoint(path, e.x, e.y, p_.lookahead);
+            const TPoint2D t = lookaheadPoint(path, e.x, e.y, p_.lookahead, corner_);
             heading_err = std::abs(angleDiff(std::atan2(t.y - e.y, t.x - e.x), e.phi));
           }
           const double path_dist = distanceToPath(path, e.x, e.y);
@@ -120,13 +121,15 @@ class GoalDwa final : public LocalPlanner {
  private:
   NavigationParams p_;
   RobotParams r_;
+  double corner_;
 };
 
 }  // namespace
 
 /** The point `lookahead` metres along the path after the point nearest to
  *  (x, y); the last point when the path is shorter. */
-TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead) {
+TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead,
+                        double corner, double reached) {
   size_t seg = 0;
   double best = std::numeric_limits<double>::infinity(), best_u = 0;
   for (size_t i = 0; i + 1 < path.size(); ++i) {
@@ -147,6 +150,12 @@ TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, d
     }
     left -= d;
     p = path[i];
+    if (corner < M_PI && i + 1 < path.size() &&
+        std::hypot(path[i].x - x, path[i].y - y) > reached) {
+      const double a0 = std::atan2(path[i].y - path[i - 1].y, path[i].x - path[i - 1].x);
+      const double a1 = std::atan2(path[i + 1].y - path[i].y, path[i + 1].x - path[i].x);
+      if (std::abs(angleDiff(a1, a0)) > corner) return path[i];
+    }
   }
   return path.back();
 }

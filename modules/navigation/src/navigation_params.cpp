@@ -41,6 +41,10 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
                 "goal DWA: critics are taken at the pose reached after this time")
           .real("lookahead", &P::lookahead, "m", 0.1, 10,
                 "goal DWA: the waypoint is this far along the route")
+          .real("corner_deg", &P::corner_deg, "deg", 0, 180,
+                "goal-dwa: the look-ahead does not cut a route vertex turning more than this "
+                "(the approach point of a doorway: the robot enters on its axis); 0: cut every "
+                "corner")
           .real("local_size", &P::local_size, "m", 1, 50, "side of the robot-centred local grid")
           .real("resolution", &P::resolution, "m", 0.01, 0.5, "cell size of the local grid")
           .real("obstacle_persistence", &P::obstacle_persistence, "s", 0, 600,
@@ -55,6 +59,24 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
                 "an obstacle in a cell seen free this recently counts as moving")
           .real("dynamic_min_free", &P::dynamic_min_free, "s", 0, 10,
                 "... when the cell had been seen free for at least this long")
+          .real("predict_horizon", &P::predict_horizon, "s", 0, 10,
+                "moving obstacles are tracked and swept along their estimated velocity this far "
+                "ahead (a person walking towards the robot blocks the lane it walks in); 0: off")
+          .real("route_predict_horizon", &P::route_predict_horizon, "s", 0, 60,
+                "replanned routes keep out of a tracked person's lane this far ahead (a robot "
+                "meeting "
+                "a person head-on moves aside early instead of when they are close)")
+          .real("track_radius", &P::track_radius, "m", 0.5, 50,
+                "moving obstacles are told apart from walls this far from a lidar (beyond the "
+                "local map: a person is tracked before it gets close)")
+          .real("track_depth_range", &P::track_depth_range, "m", 0, 20,
+                "depth-camera obstacle cells farther than this never count as moving (depth noise "
+                "grows with the square of the range)")
+          .integer("track_depth_min_cells", &P::track_depth_min_cells, "", 1, 1000,
+                   "depth: at least this many neighbouring cells must move in together (a body "
+                   "stepping in, not a flickering edge)")
+          .real("track_gate", &P::track_gate, "m", 0.05, 5,
+                "a moving cluster continues the track whose predicted centroid is this close")
           .real("cost_decay", &P::cost_decay, "m", 0.01, 5,
                 "cell cost falls from 100 to 0 over this distance to an obstacle")
           .real("footprint_padding", &P::footprint_padding, "m", 0, 1,

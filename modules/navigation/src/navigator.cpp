@@ -20,7 +20,12 @@ Navigator::Navigator(const NavigationParams& p, const RobotParams& robot)
       footprint_(robot.footprint, p.resolution),
       map_(p, footprint_),
       memory_(p.resolution, p.obstacle_persistence, p.memory_radius),
-      free_history_(p.resolution, p.memory_radius) {}
+      free_history_(p.resolution, p.track_radius),
+      tracker_([&] {
+        MovingTrackerParams t;
+        t.gate = p.track_gate;
+        return t;
+      }()) {}
 
 void Navigator::setOdometry(const TPose2D& pose, const Twist& measured, double t) {
   odom_ = pose;
@@ -44,6 +49,20 @@ std::vector<TPoint2D> Navigator::obstaclesInMap() const {
   std::vector<TPoint2D> out;
   std::vector<TPoint2D> all = memory_.points();
   all.insert(all.end(), perceived_.begin(), perceived_.end());
+  // Moving obstacles, grown as on the local cost map, and the lanes the
+  // tracked ones walk in over route_predict_horizon (a route along a
+  // person's lane is blocked and goes aside early).
+  const double grow = p_.predict_speed * p_.predict_time;
+  const int n = static_cast<int>(std::ceil(grow / p_.resolution));
+  for (const auto& m : moving_)
+    for (int dy = -n; dy <= n; ++dy)
+      for (int dx = -n; dx <= n; ++dx)
+        if (std::hypot(dx, dy) * p_.resolution <= grow)
+          all.push_back({m.x + dx * p_.resolution, m.y + dy * p_.resolution});
+  if (p_.predict_horizon > 0 && p_.route_predict_horizon > 0) {
+    const auto lanes = tracker_.predictedPath(p_.route_predict_horizon, p_.resolution, grow);
+    all.insert(all.end(), lanes.begin(), lanes.end());
+  }
   for (const auto& p : all) {
     const auto q = inv + mrpt::poses::CPoint2D(p.x, p.y);
     out.push_back({q.x(), q.y()});
@@ -130,6 +149,16 @@ void Navigator::setPerceivedObstacles(std::vector<TPoint2D> points, double t) {
   scan_t_ = t;
 }
 
+void Navigator::addPerceivedFrame(const std::vector<TPoint2D>& free_cells,
+                                  const std::vector<TPoint2D>& hit_cells, double t) {
+  if (!(p_.predict_speed * p_.predict_time > 0)) return;
+  for (const auto& c : free_cells) free_history_.markFree(c.x, c.y, t);
+  for (const auto& c : hit_cells) free_history_.markHit(c.x, c.y, t);
+  for (const auto& c : hit_cells)
+    if (std::hypot(c.x - odom_.x, c.y - odom_.y) <= p_.track_depth_range)
+      fresh_depth_hits_.push_back(c);
+}
+
 void Navigator::setRoute(const std::vector<TPoint2D>& waypoints, const TPose2D& goal) {
   route_ = waypoints;
   goal_ = goal;
@@ -189,14 +218,31 @@ Navigator::Cycle Navigator::cycle(double now) {
   if (grow > 0) {
     free_history_.prune(now, p_.dynamic_window + 1.0);
     // Only what locates its obstacles precisely and is current: the lidar
-    // hits since the last cycle. (The perception grid's occupied cells are
-    // not used: the edge cells of a static box turn from free to occupied as
-    // the robot approaches it and the box would be taken for a person.)
+    // hits and the depth frames' obstacle cells since the last cycle (not
+    // the perception grid's fused cells, whose edges grow as a static box
+    // is approached).
     for (const auto& o : fresh_hits_)
       if (free_history_.movedIn(o.x, o.y, now, p_.dynamic_window, p_.dynamic_min_free))
         moving_.push_back(o);
     fresh_hits_.clear();
-    map_.addMoving(moving_, grow);
+    // A depth camera's cells are noisier: only bodies of cells moving in together.
+    std::vector<TPoint2D> depth_moving;
+    for (const auto& o : fresh_depth_hits_)
+      if (free_history_.movedIn(o.x, o.y, now, p_.dynamic_window, p_.dynamic_min_free))
+        depth_moving.push_back(o);
+    fresh_depth_hits_.clear();
+    for (const auto& c : clusterPoints(depth_moving, 1.5 * p_.resolution))
+      if (c.size() >= static_cast<size_t>(p_.track_depth_min_cells))
+        for (size_t i : c) moving_.push_back(depth_moving[i]);
+    // Tracked, the moving obstacles also block where they are going.
+    predicted_.clear();
+    if (p_.predict_horizon > 0) {
+      tracker_.update(moving_, now);
+      predicted_ = tracker_.predictedPath(p_.predict_horizon, p_.resolution);
+    }
+    std::vector<TPoint2D> all = moving_;
+    all.insert(all.end(), predicted_.begin(), predicted_.end());
+    map_.addMoving(all, grow);
   }
   c.obstacles = memory_.size();
   c.clearance = map_.check(odom_, 2.0).clearance;

@@ -219,6 +219,8 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   const size_t steps = std::isfinite(duration)
                            ? static_cast<size_t>(std::ceil(duration / dt - 1e-9))
                            : std::numeric_limits<size_t>::max();
+  RouteReplanner replanner(o.control_rate);
+  TPoint2D route_start{sc.start.x, sc.start.y};
   for (size_t k = 0; k < steps; ++k) {
     if (o.stop && o.stop->load()) break;
     if (o.speed > 0) {
@@ -244,7 +246,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
                               static_cast<float>(depth->sensorPose.z())};
           fi.odometry = mrpt::poses::CPose2D(odo.x, odo.y, odo.phi);
           const auto c0 = std::chrono::steady_clock::now();
-          perceive.process(fi, false);
+          const auto fr = perceive.process(fi, false);
           perceive_ms +=
               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0)
                   .count();
@@ -256,6 +258,22 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
             for (int i = 0; i < g.cells(); ++i)
               if (g.prob(i, j) > perception_occupied) occ.push_back({g.centreX(i), g.centreY(j)});
           navigator.setPerceivedObstacles(std::move(occ), f.t);
+          // The frame's own floor and obstacle voxels: people walking in.
+          // (Not the grid's ray-cleared cells: rays pass over a box's top.)
+          std::vector<TPoint2D> seen_free, seen_hit;
+          const auto& ev = perceive.elevation();
+          const int me = ev.cells();
+          const double ca = std::cos(odo.phi), sa = std::sin(odo.phi);
+          if (fr.voxel_classes.size() == static_cast<size_t>(me) * me)
+            for (int i = 0; i < me; ++i)
+              for (int j = 0; j < me; ++j) {
+                const auto vc = fr.voxel_classes[static_cast<size_t>(i) * me + j];
+                if (vc == perception::VoxelClass::None) continue;
+                const double x = ev.centre(i), y = ev.centre(j);
+                const TPoint2D w{odo.x + ca * x - sa * y, odo.y + sa * x + ca * y};
+                (vc == perception::VoxelClass::Ground ? seen_free : seen_hit).push_back(w);
+              }
+          navigator.addPerceivedFrame(seen_free, seen_hit, f.t);
           continue;
         }
         navigator.addObservation(*obs, odo, f.t);
@@ -283,7 +301,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
         break;
       }
       if (route) {
-        const auto pts = withStart({sc.start.x, sc.start.y}, route->waypoints);
+        const auto pts = withStart(route_start, route->waypoints);
         const TPoint2D la = lookaheadPoint(pts, truth.x, truth.y, nav.lookahead);
         const double err =
             std::remainder(std::atan2(la.y - truth.y, la.x - truth.x) - truth.yaw, 2 * M_PI);
@@ -382,16 +400,17 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
       t_end = t;
       break;
     }
-    // Replan every 2 s from the localised pose with the obstacles the robot
-    // has seen marked on the map (boxes and people the map does not show);
-    // when that finds no route, the last one stays.
-    if (goal_mode && !user_walks_route && gp && k > 0 &&
-        k % static_cast<size_t>(2 * o.control_rate) == 0) {
+    // Replan from the localised pose with the obstacles the robot has seen
+    // marked on the map (boxes and people the map does not show; when that
+    // finds no route, the last one stays). A walker's scripted user walks
+    // the new route too: a user sees boxes and people.
+    if (goal_mode && gp && replanner.due(k, !navigator.predicted().empty())) {
       const TPose2D mp = navigator.mapPose();
-      if (auto r2 = replanAroundSeen(world->grid(), navigator.obstaclesInMap(), {mp.x, mp.y},
-                                     {goal->x, goal->y}, route, fp.inscribed,
-                                     fp.circumscribed + 0.2, nav)) {
+      if (auto r2 = replanner.step(!navigator.predicted().empty(), world->grid(),
+                                   navigator.obstaclesInMap(), {mp.x, mp.y}, {goal->x, goal->y},
+                                   route, fp.inscribed, fp.circumscribed + 0.2, nav)) {
         route = r2;
+        route_start = {mp.x, mp.y};
         navigator.setRoute(withStart({mp.x, mp.y}, route->waypoints), *goal);
       }
     }

@@ -211,6 +211,26 @@ TEST(GoalDwa, HeadsForTheRouteAndTurnsInPlaceWhenItIsBehind) {
   EXPECT_EQ(out.cmd.v, 0);
 }
 
+TEST(GoalDwa, LookaheadGoesToAPassagesApproachPointInsteadOfCuttingIt) {
+  // From (0, 0) to the approach point (2, 0.6), then along a door's axis y =
+  // 0.6: a 17 deg corner at the approach point.
+  const std::vector<TPoint2D> path{{0, 0}, {2, 0.6}, {3, 0.6}, {4, 0.6}};
+  // Cutting: 1 m ahead of a robot 0.5 m before the corner lies past it.
+  const TPoint2D cut = lookaheadPoint(path, 1.52, 0.46, 1.0);
+  EXPECT_GT(cut.x, 2.2);
+  // Stopping at corners over 10 deg: the corner itself.
+  const TPoint2D stop = lookaheadPoint(path, 1.52, 0.46, 1.0, mrpt::DEG2RAD(10.0));
+  EXPECT_NEAR(stop.x, 2.0, 1e-9);
+  EXPECT_NEAR(stop.y, 0.6, 1e-9);
+  // Within `reached` of it: on along the axis.
+  const TPoint2D on = lookaheadPoint(path, 1.9, 0.57, 1.0, mrpt::DEG2RAD(10.0), 0.15);
+  EXPECT_GT(on.x, 2.5);
+  EXPECT_NEAR(on.y, 0.6, 1e-9);
+  // A gentle bend (under the threshold) is cut as before.
+  const std::vector<TPoint2D> gentle{{0, 0}, {2, 0.1}, {4, 0.1}};
+  EXPECT_GT(lookaheadPoint(gentle, 1.5, 0.07, 1.0, mrpt::DEG2RAD(10.0)).x, 2.2);
+}
+
 TEST(PlannerRegistry, KnowsThePluginsByNameAndRejectsOthers) {
   const auto& reg = PlannerRegistry::instance();
   EXPECT_EQ(reg.create("user-intent-dwa", walkerNav(), walkerRobot())->name(), "user-intent-dwa");

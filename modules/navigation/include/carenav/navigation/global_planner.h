@@ -67,4 +67,25 @@ std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map
                                       const TPoint2D& goal, const std::optional<Route>& route,
                                       double robot_radius, double skip, const NavigationParams& p);
 
+/** When to replan (the simulator runs and the bridge share it): every 2 s
+ *  when the route ahead is blocked by what the robot has seen; every 0.5 s
+ *  while a tracked person's lane is on the local map (it may cross the
+ *  route); and, after a detour around a person, once the person is gone, a
+ *  fresh route (the detour is undone). */
+class RouteReplanner {
+ public:
+  explicit RouteReplanner(double control_rate) : rate_(control_rate) {}
+  /** Whether cycle k replans; `people`: tracked lanes exist now. */
+  bool due(size_t k, bool people) const;
+  /** Replans (call when due): a new route, or nullopt to keep the current one. */
+  std::optional<Route> step(bool people, const mrpt::maps::COccupancyGridMap2D& map,
+                            const std::vector<TPoint2D>& seen, const TPoint2D& from,
+                            const TPoint2D& goal, const std::optional<Route>& route,
+                            double robot_radius, double skip, const NavigationParams& p);
+
+ private:
+  double rate_;
+  bool detour_ = false;
+};
+
 }  // namespace carenav::navigation

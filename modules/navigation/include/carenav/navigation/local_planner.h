@@ -121,8 +121,13 @@ class PlannerRegistry {
 };
 
 /** The point `lookahead` metres along the polyline after the point of it
- *  nearest to (x, y); its last point when the rest is shorter. */
-TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead);
+ *  nearest to (x, y); its last point when the rest is shorter. With
+ *  `corner` (rad) below pi the look-ahead stops at a vertex where the
+ *  polyline turns by more than that, until (x, y) is within `reached` of
+ *  it: the robot goes to the corner instead of cutting it (the approach
+ *  point of a narrow passage is such a corner: it enters on the axis). */
+TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead,
+                        double corner = M_PI, double reached = 0.15);
 
 /** Seed 000's shared control for a walker (Alg. 4, Eq. 4.10). */
 std::unique_ptr<LocalPlanner> makeUserIntentDwa(const NavigationParams& p, const RobotParams& r);

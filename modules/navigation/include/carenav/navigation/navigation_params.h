@@ -39,6 +39,7 @@ struct NavigationParams {
   double turn_in_place_deg = 60;  ///< turn on the spot when the waypoint is further off
   double score_time = 1.5;        ///< s, goal critics are taken at the pose reached then
   double lookahead = 1.0;         ///< m, waypoint distance along the path ahead of the robot
+  double corner_deg = 10;  ///< deg, goal-dwa goes to route vertices turning more (0: cuts all)
   // Local cost map and obstacle memory (HOBBIT, seed 004)
   double local_size = 8.0;            ///< m, side of the robot-centred local grid
   double resolution = 0.05;           ///< m, cell size of the local grid
@@ -52,6 +53,15 @@ struct NavigationParams {
   double predict_time = 1.0;      ///< s, look-ahead of that growth (inflation = speed x time)
   double dynamic_window = 1.5;    ///< s, a cell seen free this recently and now occupied is moving
   double dynamic_min_free = 0.3;  ///< s, ... after being seen free for at least this long
+  double predict_horizon = 2.0;   ///< s, tracked moving obstacles are swept along their velocity
+                                  ///< this far (0: no tracking)
+  double route_predict_horizon =
+      8.0;  ///< s, the route avoids a tracked person's lane this far ahead
+  double track_radius =
+      8.0;  ///< m, moving obstacles are told apart from walls this far from a lidar
+  double track_depth_range = 3.0;  ///< m, depth-camera cells farther away never count as moving
+  int track_depth_min_cells = 3;   ///< depth: cells moving in together (a body, not noise)
+  double track_gate = 0.6;         ///< m, a moving cluster continues the track predicted this close
   // Global route (A* on the inflated static map)
   double plan_clearance = 0.1;  ///< m, extra clearance kept by the route beyond the footprint
   double plan_cost_weight = 2;  ///< extra route cost per metre near obstacles (keeps paths central)

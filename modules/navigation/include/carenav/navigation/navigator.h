@@ -6,6 +6,7 @@
 #include <carenav/common/robot.h>
 #include <carenav/navigation/local_map.h>
 #include <carenav/navigation/local_planner.h>
+#include <carenav/navigation/moving_tracker.h>
 #include <carenav/navigation/navigation_params.h>
 #include <carenav/navigation/safety.h>
 
@@ -45,6 +46,12 @@ class Navigator {
    *  fusion), so these are not aged by the obstacle memory. Counts as fresh
    *  sensor data. */
   void setPerceivedObstacles(std::vector<TPoint2D> points, double t);
+  /** One depth frame's own evidence (odometry frame): the cells where it
+   *  saw floor and the cells where it saw an obstacle. Feeds the
+   *  moving-obstacle detection (a person walking onto floor seen a moment
+   *  before), as a lidar's rays do; no-op without prediction. */
+  void addPerceivedFrame(const std::vector<TPoint2D>& free_cells,
+                         const std::vector<TPoint2D>& hit_cells, double t);
 
   /** Localisation asks the robot to turn in place to relocalise (HOBBIT,
    *  seed 004; localization::Localizer::needsRotateInPlace). While set, a
@@ -82,6 +89,9 @@ class Navigator {
   const std::vector<TPoint2D>& perceived() const { return perceived_; }
   /** The obstacle cells taken as moving in the last cycle (odometry frame). */
   const std::vector<TPoint2D>& moving() const { return moving_; }
+  /** Where the tracked moving obstacles go within predict_horizon (odometry frame). */
+  const std::vector<TPoint2D>& predicted() const { return predicted_; }
+  const MovingTracker& tracker() const { return tracker_; }
   TPose2D odomPose() const { return odom_; }
   /** Pose of the robot in the map frame (odometry pose corrected by the latest localisation). */
   TPose2D mapPose() const;
@@ -102,7 +112,10 @@ class Navigator {
   ObstacleMemory memory_;
   FreeSpaceHistory free_history_;
   std::vector<TPoint2D> moving_;
-  std::vector<TPoint2D> fresh_hits_;  // lidar hits since the last cycle (odometry frame)
+  std::vector<TPoint2D> predicted_;
+  MovingTracker tracker_;
+  std::vector<TPoint2D> fresh_hits_;        // lidar hits since the last cycle (odometry frame)
+  std::vector<TPoint2D> fresh_depth_hits_;  // depth frames' obstacle cells since the last cycle
   TPose2D odom_;
   Twist measured_;
   std::optional<double> odom_t_, scan_t_, intent_t_;

@@ -1,0 +1,61 @@
+// Tracks of moving obstacles (people) and where they will be: the points
+// that moved into open space (FreeSpaceHistory::movedIn) are clustered each
+// cycle, clusters are associated with the tracks of the cycle before, and
+// each track's velocity is the least-squares slope of its centroids over a
+// short window (one cycle's displacement is mostly the noise of which of
+// the body's cells happened to be new).
+#pragma once
+
+#include <mrpt/math/TPoint2D.h>
+
+#include <utility>
+#include <vector>
+
+namespace carenav::navigation {
+
+using mrpt::math::TPoint2D;
+
+/** Settings of the tracker (from [navigation]: track_link, track_gate,
+ *  track_max_speed, track_keep, predict_horizon). */
+struct MovingTrackerParams {
+  double link = 0.3;  ///< m, points closer than this belong to one cluster
+  double gate = 0.6;  ///< m, a cluster continues a track whose predicted centroid is this close
+  double max_speed = 1.5;   ///< m/s, estimated speeds are capped here (a person walks below)
+  double min_speed = 0.15;  ///< m/s, slower tracks are not swept (centroid jitter)
+  double keep = 0.6;        ///< s, a track not seen this long is dropped
+  double window = 1.5;  ///< s, the velocity is the least-squares slope of the centroids this long
+};
+
+/** One tracked moving obstacle (odometry frame). */
+struct MovingTrack {
+  TPoint2D centroid;  ///< m, centroid of its points at the last sighting
+  TPoint2D velocity;  ///< m/s, estimated
+  double radius = 0;  ///< m, largest distance of its points from the centroid
+  double seen = 0;    ///< s, time of the last sighting
+  int sightings = 0;  ///< cycles it was seen in
+  std::vector<std::pair<double, TPoint2D>> history;  ///< (time, centroid) within the window
+};
+
+class MovingTracker {
+ public:
+  explicit MovingTracker(const MovingTrackerParams& p = {}) : p_(p) {}
+  /** The points that moved in, seen at time `t`. */
+  void update(const std::vector<TPoint2D>& moved_in, double t);
+  const std::vector<MovingTrack>& tracks() const { return tracks_; }
+  /** Where the tracks with a velocity go within `horizon` seconds: points
+   *  every `step` metres along each track's velocity from its centroid
+   *  (excluded), across a lane as wide as the track's spread (its radius)
+   *  plus `widen` on each side. Empty for horizon <= 0. */
+  std::vector<TPoint2D> predictedPath(double horizon, double step, double widen = 0) const;
+  void clear() { tracks_.clear(); }
+
+ private:
+  MovingTrackerParams p_;
+  std::vector<MovingTrack> tracks_;
+};
+
+/** Single-link clusters of points (link distance `link`): indices per
+ *  cluster, in order of their first point. */
+std::vector<std::vector<size_t>> clusterPoints(const std::vector<TPoint2D>& pts, double link);
+
+}  // namespace carenav::navigation

@@ -1,0 +1,123 @@
+// Moving-obstacle tracks: nearest-neighbour association of clusters with a
+// constant-velocity prediction (the people model of seed 002 sec. 6.1's
+// person-crossing and person-towards tests: a person walks straight at a
+// steady pace).
+#include <carenav/navigation/moving_tracker.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace carenav::navigation {
+
+std::vector<std::vector<size_t>> clusterPoints(const std::vector<TPoint2D>& pts, double link) {
+  std::vector<std::vector<size_t>> out;
+  std::vector<int> label(pts.size(), -1);
+  const double l2 = link * link;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    if (label[i] >= 0) continue;
+    label[i] = static_cast<int>(out.size());
+    std::vector<size_t> members{i};
+    for (size_t k = 0; k < members.size(); ++k) {
+      const TPoint2D& a = pts[members[k]];
+      for (size_t j = 0; j < pts.size(); ++j) {
+        if (label[j] >= 0) continue;
+        const double dx = pts[j].x - a.x, dy = pts[j].y - a.y;
+        if (dx * dx + dy * dy <= l2) {
+          label[j] = label[i];
+          members.push_back(j);
+        }
+      }
+    }
+    out.push_back(std::move(members));
+  }
+  return out;
+}
+
+void MovingTracker::update(const std::vector<TPoint2D>& moved_in, double t) {
+  // drop tracks not seen for a while
+  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
+                               [&](const MovingTrack& k) { return t - k.seen > p_.keep; }),
+                tracks_.end());
+  const auto clusters = clusterPoints(moved_in, p_.link);
+  std::vector<MovingTrack> seen;
+  std::vector<char> used(tracks_.size(), 0);
+  for (const auto& c : clusters) {
+    MovingTrack m;
+    for (size_t i : c) m.centroid.x += moved_in[i].x, m.centroid.y += moved_in[i].y;
+    m.centroid.x /= c.size();
+    m.centroid.y /= c.size();
+    for (size_t i : c)
+      m.radius = std::max(m.radius,
+                          std::hypot(moved_in[i].x - m.centroid.x, moved_in[i].y - m.centroid.y));
+    m.seen = t;
+    m.sightings = 1;
+    // the nearest track by its constant-velocity prediction, within the gate
+    size_t best = tracks_.size();
+    double best_d = p_.gate;
+    for (size_t k = 0; k < tracks_.size(); ++k) {
+      if (used[k]) continue;
+      const double dt = t - tracks_[k].seen;
+      const double px = tracks_[k].centroid.x + tracks_[k].velocity.x * dt;
+      const double py = tracks_[k].centroid.y + tracks_[k].velocity.y * dt;
+      const double d = std::hypot(m.centroid.x - px, m.centroid.y - py);
+      if (d < best_d) best_d = d, best = k;
+    }
+    if (best < tracks_.size()) {
+      used[best] = 1;
+      const MovingTrack& prev = tracks_[best];
+      m.sightings = prev.sightings + 1;
+      for (const auto& h : prev.history)
+        if (t - h.first <= p_.window) m.history.push_back(h);
+    }
+    m.history.push_back({t, m.centroid});
+    m.velocity = {0, 0};
+    if (m.history.size() >= 3) {
+      // least-squares slope of x(t) and y(t)
+      double st = 0, sx = 0, sy = 0;
+      for (const auto& h : m.history) st += h.first, sx += h.second.x, sy += h.second.y;
+      const double n = static_cast<double>(m.history.size());
+      const double mt = st / n, mx = sx / n, my = sy / n;
+      double stt = 0, stx = 0, sty = 0;
+      for (const auto& h : m.history) {
+        const double dt = h.first - mt;
+        stt += dt * dt, stx += dt * (h.second.x - mx), sty += dt * (h.second.y - my);
+      }
+      if (stt > 1e-9) {
+        TPoint2D v{stx / stt, sty / stt};
+        const double s = std::hypot(v.x, v.y);
+        if (s > p_.max_speed) v.x *= p_.max_speed / s, v.y *= p_.max_speed / s;
+        m.velocity = v;
+      }
+    }
+    seen.push_back(m);
+  }
+  // tracks not seen this cycle stay (a person hidden for a moment)
+  for (size_t k = 0; k < tracks_.size(); ++k)
+    if (!used[k]) seen.push_back(tracks_[k]);
+  tracks_ = std::move(seen);
+}
+
+std::vector<TPoint2D> MovingTracker::predictedPath(double horizon, double step,
+                                                   double widen) const {
+  std::vector<TPoint2D> out;
+  if (!(horizon > 0) || !(step > 0)) return out;
+  for (const auto& k : tracks_) {
+    if (k.history.size() < 3) continue;  // two displacements before a velocity is trusted
+    const double s = std::hypot(k.velocity.x, k.velocity.y);
+    if (s < p_.min_speed) continue;
+    const double len = s * horizon;
+    const double ux = k.velocity.x / s, uy = k.velocity.y / s;
+    const int n = static_cast<int>(std::ceil(len / step));
+    for (int i = 1; i <= n; ++i) {
+      const double d = std::min(len, i * step);
+      // the body's spread across the direction of travel
+      const double half = k.radius + widen;
+      for (double off = -half; off <= half + 1e-9; off += step)
+        out.push_back({k.centroid.x + ux * d - uy * off, k.centroid.y + uy * d + ux * off});
+    }
+  }
+  return out;
+}
+
+}  // namespace carenav::navigation

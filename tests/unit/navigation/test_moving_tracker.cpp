@@ -1,0 +1,205 @@
+// Moving-obstacle tracks: velocity from the centroids over a window, the lane
+// a tracked person walks in, and the Navigator using it (lidar and depth).
+#include <carenav/navigation/moving_tracker.h>
+#include <carenav/navigation/navigator.h>
+
+#include <mrpt/obs/CObservation2DRangeScan.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace carenav;
+using namespace carenav::navigation;
+
+namespace {
+
+/** The half of a 0.25 m person facing -x at (cx, cy), every 5 cm, with
+ *  jitter: what a lidar in front of it sees. */
+std::vector<TPoint2D> personFront(double cx, double cy, std::mt19937& rng) {
+  std::normal_distribution<double> n(0, 0.02);
+  std::vector<TPoint2D> pts;
+  for (double a = M_PI / 2; a <= 3 * M_PI / 2 + 1e-9; a += 0.2)
+    pts.push_back({cx + 0.25 * std::cos(a) + n(rng), cy + 0.25 * std::sin(a) + n(rng)});
+  return pts;
+}
+
+}  // namespace
+
+TEST(MovingTracker, ClustersApartPointsSeparately) {
+  const std::vector<TPoint2D> pts{{0, 0}, {0.1, 0}, {0.2, 0.05}, {2, 2}, {2.1, 2}, {5, 5}};
+  const auto c = clusterPoints(pts, 0.3);
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c[0].size(), 3u);
+  EXPECT_EQ(c[1].size(), 2u);
+  EXPECT_EQ(c[2].size(), 1u);
+}
+
+TEST(MovingTracker, EstimatesAWalkersVelocityAndSweepsItsLaneAhead) {
+  std::mt19937 rng(3);
+  MovingTracker tr;
+  for (int k = 0; k <= 15; ++k) {
+    const double t = 0.1 * k;
+    tr.update(personFront(6.0 - 0.5 * t, 1.2, rng), t);
+  }
+  ASSERT_EQ(tr.tracks().size(), 1u);
+  const auto& k = tr.tracks()[0];
+  EXPECT_NEAR(k.velocity.x, -0.5, 0.08);
+  EXPECT_NEAR(k.velocity.y, 0.0, 0.08);
+  EXPECT_EQ(k.sightings, 16);
+  const auto lane = tr.predictedPath(2.0, 0.05);
+  ASSERT_FALSE(lane.empty());
+  double xmin = 1e9, xmax = -1e9;
+  for (const auto& p : lane) {
+    xmin = std::min(xmin, p.x);
+    xmax = std::max(xmax, p.x);
+    EXPECT_NEAR(p.y, 1.2, k.radius + 0.06) << "the lane is as wide as the body";
+  }
+  EXPECT_LT(xmax, k.centroid.x) << "only ahead of the person";
+  EXPECT_NEAR(k.centroid.x - xmin, 1.0, 0.2) << "0.5 m/s for 2 s";
+  // wider lanes for the route
+  const auto wide = tr.predictedPath(2.0, 0.05, 0.5);
+  double ymax = -1e9;
+  for (const auto& p : wide) ymax = std::max(ymax, p.y);
+  EXPECT_GT(ymax, 1.2 + 0.45);
+}
+
+TEST(MovingTracker, StandingClusterHasNoLaneAndOldTracksAreDropped) {
+  std::mt19937 rng(5);
+  MovingTracker tr;
+  for (int k = 0; k <= 10; ++k) tr.update(personFront(3.0, 0.0, rng), 0.1 * k);
+  ASSERT_EQ(tr.tracks().size(), 1u);
+  EXPECT_LT(std::hypot(tr.tracks()[0].velocity.x, tr.tracks()[0].velocity.y), 0.15);
+  EXPECT_TRUE(tr.predictedPath(2.0, 0.05).empty()) << "jitter is not walking";
+  tr.update({}, 1.3);
+  EXPECT_EQ(tr.tracks().size(), 1u) << "hidden for a moment: kept";
+  tr.update({}, 2.0);
+  EXPECT_TRUE(tr.tracks().empty()) << "unseen for longer than keep";
+}
+
+TEST(MovingTracker, TwoPeopleKeepTheirOwnTracks) {
+  std::mt19937 rng(7);
+  MovingTracker tr;
+  for (int k = 0; k <= 12; ++k) {
+    const double t = 0.1 * k;
+    auto a = personFront(5.0 - 0.5 * t, 1.0, rng);
+    const auto b = personFront(3.0, -1.0 + 0.6 * t, rng);
+    a.insert(a.end(), b.begin(), b.end());
+    tr.update(a, t);
+  }
+  ASSERT_EQ(tr.tracks().size(), 2u);
+  bool towards = false, crossing = false;
+  for (const auto& k : tr.tracks()) {
+    if (std::abs(k.velocity.x + 0.5) < 0.1 && std::abs(k.velocity.y) < 0.1) towards = true;
+    if (std::abs(k.velocity.x) < 0.1 && std::abs(k.velocity.y - 0.6) < 0.1) crossing = true;
+  }
+  EXPECT_TRUE(towards);
+  EXPECT_TRUE(crossing);
+}
+
+namespace {
+
+RobotParams smallRobot() {
+  RobotParams r;
+  r.footprint = {{0.3, 0.25}, {-0.25, 0.25}, {-0.25, -0.25}, {0.3, -0.25}};
+  r.v_max = 0.25;
+  r.w_max = 1.0;
+  r.safe_distance = 0.1;
+  return r;
+}
+
+/** A lidar at the origin looking along +x (721 beams over 180 deg) in a
+ *  corridor |y| < 1.5, with a 0.25 m person at (px, py). */
+mrpt::obs::CObservation2DRangeScan corridorScan(double px, double py) {
+  mrpt::obs::CObservation2DRangeScan s;
+  s.aperture = static_cast<float>(M_PI);
+  s.rightToLeft = true;
+  s.maxRange = 20;
+  s.resizeScan(721);
+  for (size_t i = 0; i < 721; ++i) {
+    const double a = -M_PI / 2 + M_PI * static_cast<double>(i) / 720;
+    const double dx = std::cos(a), dy = std::sin(a);
+    double r = std::abs(dy) > 1e-6 ? 1.5 / std::abs(dy) : 19.0;
+    // ray - circle
+    const double b = dx * px + dy * py, c = px * px + py * py - 0.25 * 0.25;
+    const double disc = b * b - c;
+    if (disc >= 0 && b - std::sqrt(disc) > 0) r = std::min(r, b - std::sqrt(disc));
+    s.setScanRange(i, static_cast<float>(std::min(r, 19.0)));
+    s.setScanRangeValidity(i, true);
+  }
+  return s;
+}
+
+/** The robot stands at the origin while a person walks from x = 6 towards
+ *  it along y = py for 2 s; the remembered obstacles for the route. */
+std::pair<std::vector<TPoint2D>, size_t> walkTowards(const NavigationParams& p, double py) {
+  Navigator n(p, smallRobot());
+  for (int k = 0; k <= 20; ++k) {
+    const double t = 0.1 * k;
+    n.setOdometry({0, 0, 0}, {0, 0}, t);
+    n.addObservation(corridorScan(6.0 - 0.5 * t, py), {0, 0, 0}, t);
+    n.cycle(t);
+  }
+  return {n.obstaclesInMap(), n.predicted().size()};
+}
+
+bool anyNear(const std::vector<TPoint2D>& pts, double x, double y, double r) {
+  for (const auto& p : pts)
+    if (std::hypot(p.x - x, p.y - y) < r) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST(Navigator, APersonWalkingTowardsTheRobotBlocksItsLaneForTheRoute) {
+  NavigationParams p;
+  p.plugin = "goal-dwa";
+  // At t = 2 the person is at x = 5 (front at 4.75): its lane towards the
+  // robot (x = 2.5, 8 s at 0.5 m/s reaches past it) is blocked for the route,
+  // the other side of the corridor is not.
+  const auto [on, lane] = walkTowards(p, 0.0);
+  EXPECT_GT(lane, 0u) << "a walking person is swept ahead on the local map";
+  EXPECT_TRUE(anyNear(on, 2.5, 0.0, 0.06));
+  EXPECT_TRUE(anyNear(on, 2.5, 0.5, 0.06)) << "the lane is widened like the cost map";
+  EXPECT_FALSE(anyNear(on, 2.5, -1.0, 0.2)) << "room to pass beside it";
+  // Without tracking only the person's own cells (grown) are there.
+  p.predict_horizon = 0;
+  const auto [off, none] = walkTowards(p, 0.0);
+  EXPECT_EQ(none, 0u);
+  EXPECT_FALSE(anyNear(off, 2.5, 0.0, 0.5));
+}
+
+TEST(Navigator, DepthFramesTellAPersonFromABox) {
+  // The floor in front is seen free for 1 s; then obstacle cells appear on
+  // it (a person stepping in) or on cells never seen free (a box's top).
+  auto run = [](bool onFloor) {
+    NavigationParams p;
+    p.plugin = "goal-dwa";
+    Navigator n(p, smallRobot());
+    std::vector<TPoint2D> floor, hits;
+    for (double x = 1.0; x <= 3.0; x += 0.05)
+      for (double y = -1.0; y <= 1.0; y += 0.05) {
+        const bool body = std::hypot(x - 2.0, y) < 0.25;
+        if (!body || onFloor) floor.push_back({x, y});
+        if (body) hits.push_back({x, y});
+      }
+    for (int k = 0; k < 10; ++k) {
+      const double t = 0.1 * k;
+      n.setOdometry({0, 0, 0}, {0, 0}, t);
+      std::vector<TPoint2D> f;
+      for (const auto& c : floor)
+        if (onFloor || std::hypot(c.x - 2.0, c.y) >= 0.25) f.push_back(c);
+      n.addPerceivedFrame(f, onFloor ? std::vector<TPoint2D>{} : hits, t);
+      n.setPerceivedObstacles(onFloor ? std::vector<TPoint2D>{} : hits, t);
+      n.cycle(t);
+    }
+    n.setOdometry({0, 0, 0}, {0, 0}, 1.0);
+    n.addPerceivedFrame({}, hits, 1.0);
+    n.setPerceivedObstacles(hits, 1.0);
+    n.cycle(1.0);
+    return n.moving().size();
+  };
+  EXPECT_GE(run(true), 5u) << "obstacle on floor seen a moment before: moving";
+  EXPECT_EQ(run(false), 0u) << "a box that was always there";
+}
