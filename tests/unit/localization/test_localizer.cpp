@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <stdexcept>
 
 namespace carenav::localization {
@@ -153,6 +154,49 @@ TEST(Localizer, InitialPoseOutsideTheMapOrOnAWallIsAnInputError) {
   ASSERT_TRUE(wall);
   EXPECT_THROW(loc.initPose(mrpt::poses::CPose2D(wall->first, wall->second, 0), 0.1, 0.1, 0.1),
                InputError);
+}
+
+// The particle weights come from a likelihood table built once for the map
+// (a distance transform); it must give what MRPT's own likelihood field
+// (lmLikelihoodField_Thrun, the same lf_* options, which searches a window
+// around each cell) gives for the same scan and pose: on the walls, in free
+// space, near the edge of the map and off it, for two sets of options.
+TEST(Localizer, LikelihoodTableGivesMrptsLikelihoodField) {
+  for (const double sigma : {0.20, 0.35}) {
+    LocalizationParams p;
+    p.lf_sigma = sigma;
+    p.lf_max_corr_dist = sigma > 0.3 ? 0.5 : 0.3;
+    p.lf_decimation = sigma > 0.3 ? 7 : 20;
+    Localizer loc(demoMap(), p);
+    // MRPT's model on a copy of the Localizer's grid (which carries the options).
+    io::COccupancyGridMap2D grid(loc.map());
+    ASSERT_EQ(grid.likelihoodOptions.likelihoodMethod,
+              io::COccupancyGridMap2D::lmLikelihoodField_Thrun);
+    slam::ScanStream stream(kRawlog, "");
+    slam::ScanStep s;
+    std::mt19937 gen(7);
+    std::uniform_real_distribution<double> ux(grid.getXMin() - 1, grid.getXMax() + 1),
+        uy(grid.getYMin() - 1, grid.getYMax() + 1), ua(-M_PI, M_PI);
+    size_t compared = 0, scans = 0;
+    double lo = 0, hi = -1e9;
+    while (stream.next(s)) {
+      if (scans++ % 4 != 0) continue;
+      for (int k = 0; k < 300; ++k) {
+        const mrpt::poses::CPose2D pose(ux(gen), uy(gen), ua(gen));
+        const double mrpt_ll =
+            grid.computeObservationLikelihood(*s.scan, mrpt::poses::CPose3D(pose));
+        const double ours = loc.scanLogLikelihood(*s.scan, pose);
+        // the same logs summed in the same order: equal up to rounding
+        ASSERT_NEAR(ours, mrpt_ll, 1e-9 * std::max(1.0, std::abs(mrpt_ll)))
+            << "scan " << scans << " pose " << pose;
+        lo = std::min(lo, mrpt_ll);
+        hi = std::max(hi, mrpt_ll);
+        ++compared;
+      }
+    }
+    EXPECT_EQ(compared, 10u * 300u);
+    EXPECT_LT(lo + 5, hi);  // the poses did see different likelihoods
+  }
 }
 
 TEST(Localizer, StepBeforeInitIsALogicError) {
