@@ -6,7 +6,7 @@
 #include <mrpt/maps/CPointsMap.h>
 #include <mrpt/math/distributions.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
-#include <mrpt/poses/CPoseRandomSampler.h>
+#include <mrpt/poses/CPosePDFGaussian.h>
 #include <mrpt/random/RandomGenerators.h>
 
 #include <algorithm>
@@ -15,7 +15,6 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
-#include <unordered_set>
 
 namespace carenav::localization {
 
@@ -274,22 +273,41 @@ mrpt::math::TPose2D Localizer::randomPoseIn(const std::vector<size_t>& cells) co
   return {x, y, rng.drawUniform(-M_PI, M_PI)};
 }
 
-/** Draws odometry increments from the motion model (MRPT's sampler of the
- *  Gaussian pose change CActionRobotMovement2D computes: the same draws from
- *  the same random generator as MRPT's particle filter makes) and composes
- *  them onto particles, in 2D. */
+/** Draws odometry increments from the Gaussian pose change that
+ *  CActionRobotMovement2D computes and composes them onto particles, in 2D.
+ *  The increment is mean + Z r, Z the covariance's eigenvectors scaled by the
+ *  square roots of its eigenvalues and r three standard normal draws: what
+ *  MRPT's CPoseRandomSampler draws, in the same order from the same generator
+ *  and with the same arithmetic, so a seed gives the same particles. */
 struct Localizer::MotionSampler {
   explicit MotionSampler(const mrpt::poses::CPosePDF& pose_change) {
-    sampler.setPosePDF(pose_change);
+    const auto* g = dynamic_cast<const mrpt::poses::CPosePDFGaussian*>(&pose_change);
+    if (!g) throw std::logic_error("Localizer: the motion model must be Gaussian");
+    mean = g->mean.asTPose();
+    std::vector<double> eig;
+    g->cov.eig_symmetric(z, eig);
+    for (int i = 0; i < 3; ++i) {
+      const double root = std::sqrt(eig[i]);
+      for (int d = 0; d < 3; ++d) z(d, i) *= root;
+    }
   }
-  mrpt::math::TPose2D moved(const mrpt::math::TPose2D& p) const {
-    CPose2D inc;
-    sampler.drawSample(inc);
+  mrpt::math::TPose2D increment() const {
+    auto& rng = mrpt::random::getRandomGenerator();
+    double r[3] = {0, 0, 0};
+    for (int i = 0; i < 3; ++i) {
+      const double n = rng.drawGaussian1D_normalized();
+      for (int d = 0; d < 3; ++d) r[d] += z(d, i) * n;
+    }
+    return {mean.x + r[0], mean.y + r[1], mrpt::math::wrapToPi(mean.phi + r[2])};
+  }
+  static mrpt::math::TPose2D compose(const mrpt::math::TPose2D& p, const mrpt::math::TPose2D& inc) {
     const double c = std::cos(p.phi), s = std::sin(p.phi);
-    return {p.x + c * inc.x() - s * inc.y(), p.y + s * inc.x() + c * inc.y(),
-            mrpt::math::wrapToPi(p.phi + inc.phi())};
+    return {p.x + c * inc.x - s * inc.y, p.y + s * inc.x + c * inc.y,
+            mrpt::math::wrapToPi(p.phi + inc.phi)};
   }
-  mrpt::poses::CPoseRandomSampler sampler;
+  mrpt::math::TPose2D moved(const mrpt::math::TPose2D& p) const { return compose(p, increment()); }
+  mrpt::math::TPose2D mean;
+  mrpt::math::CMatrixDouble33 z;
 };
 
 // Multinomial draws by weight, the rule of MRPT's
@@ -364,16 +382,28 @@ void Localizer::drawKld(const MotionSampler& motion, size_t n_min) {
   const double delta_1 = 1 - p_.kld_delta, epsilon_1 = 0.5 / p_.kld_epsilon;
   const double bin_xy = p_.kld_bin_xy, bin_phi = mrpt::DEG2RAD(p_.kld_bin_phi);
   drawn_.clear();
-  bins_.clear();
+  // Occupied KLD bins: open addressing, at most n_max keys in twice the slots.
+  constexpr uint64_t kEmpty = ~uint64_t(0);  // no key is all ones
+  int bits = 4;
+  while ((size_t(1) << bits) < 2 * n_max) ++bits;
+  bins_.assign(size_t(1) << bits, kEmpty);
+  const uint64_t mask = (uint64_t(1) << bits) - 1;
+  size_t occupied = 0;
+  const auto insert = [&](uint64_t key) {  // true when the bin was empty
+    for (uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> (64 - bits);; h = (h + 1) & mask) {
+      if (bins_[h] == key) return false;
+      if (bins_[h] == kEmpty) {
+        bins_[h] = key;
+        ++occupied;
+        return true;
+      }
+    }
+  };
   size_t nx = n_min;
   do {
-    CPose2D inc;
-    motion.sampler.drawSample(inc);
-    const auto& from = parts[fast_draw_.draw(rng.drawUniform(0.0, 0.999999))].d;
-    const double c = std::cos(from.phi), s = std::sin(from.phi);
-    const mrpt::math::TPose2D pose(from.x + c * inc.x() - s * inc.y(),
-                                   from.y + s * inc.x() + c * inc.y(),
-                                   mrpt::math::wrapToPi(from.phi + inc.phi()));
+    const auto inc = motion.increment();
+    const auto pose =
+        MotionSampler::compose(parts[fast_draw_.draw(rng.drawUniform(0.0, 0.999999))].d, inc);
     drawn_.push_back(pose);
     // Bin key: x and y bins in 22 bits each, heading bin in 20.
     const auto bin = [](double v, double size, int64_t half) {
@@ -383,9 +413,9 @@ void Localizer::drawKld(const MotionSampler& motion, size_t n_min) {
     const uint64_t key = bin(pose.x, bin_xy, int64_t(1) << 21) << 42 |
                          bin(pose.y, bin_xy, int64_t(1) << 21) << 20 |
                          bin(pose.phi, bin_phi, int64_t(1) << 19);
-    if (bins_.insert(key).second && bins_.size() > 1)
+    if (insert(key) && occupied > 1)
       nx = static_cast<size_t>(mrpt::round(
-          epsilon_1 * mrpt::math::chi2inv(delta_1, static_cast<unsigned>(bins_.size() - 1))));
+          epsilon_1 * mrpt::math::chi2inv(delta_1, static_cast<unsigned>(occupied - 1))));
   } while (drawn_.size() < std::max(nx, n_min) && drawn_.size() < n_max);
   parts.resize(drawn_.size());
   for (size_t i = 0; i < drawn_.size(); ++i) {
@@ -583,7 +613,8 @@ StepResult Localizer::step(const CPose2D& odometry,
     // start's particles.
     const CPose2D expected = mean_ + pending_;
     const bool resample = mcl_.ESS() < p_.resample_ess;
-    std::vector<double> prior;  // log weights before the scan
+    auto& prior = prior_;  // log weights before the scan
+    prior.clear();
     if (resample) {
       drawKld(motion,
               static_cast<size_t>(
@@ -598,7 +629,8 @@ StepResult Localizer::step(const CPose2D& odometry,
       }
     }
     const size_t n = mcl_.m_particles.size();
-    std::vector<double> ll(n);  // log p(z|x) per particle
+    auto& ll = ll_;  // log p(z|x) per particle
+    ll.resize(n);
     if (!scan->isPlanarScan(map_->insertionOptions.horizontalTolerance)) {
       std::fill(ll.begin(), ll.end(), -10.0);  // as MRPT: a tilted scan says nothing
     } else {

@@ -11,11 +11,11 @@
 #include <mrpt/slam/CMonteCarloLocalization2D.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <string>
-#include <unordered_set>
 #include <vector>
 
 namespace carenav::localization {
@@ -185,7 +185,8 @@ class Localizer {
     void prepare(const std::vector<double>& log_w);
     size_t draw(double u) const;
   } fast_draw_;
-  std::unordered_set<uint64_t> bins_;
+  std::vector<uint64_t> bins_;  // KLD bins (hash table)
+  std::vector<double> prior_, ll_;
 };
 
 }  // namespace carenav::localization
