@@ -101,6 +101,8 @@ class Localizer {
   mrpt::poses::CPose2D pose() const;
   mrpt::math::CMatrixDouble33 covariance() const { return cov_; }
   size_t particleCount() const;
+  /** The particle set (poses and log weights). */
+  const mrpt::poses::CPosePDFParticles& particles() const { return mcl_; }
   /** log p(scan | pose) under the grid's likelihood field, the value every
    *  particle is weighed with: MRPT's lmLikelihoodField_Thrun model with the
    *  lf_* parameters (see COccupancyGridMap2D::computeObservationLikelihood),
