@@ -424,6 +424,27 @@ void Localizer::drawKld(const MotionSampler& motion, size_t n_min) {
   }
 }
 
+// ESS ratio of the particle weights and their normalisation to a largest log
+// weight of 0, computed as MRPT's CParticleFilterDataImpl::ESS and
+// normalizeWeights do (same operations in the same order, so the same
+// values), without their per-element dynamic_cast.
+double Localizer::effectiveSampleRatio() const {
+  const auto& parts = mcl_.m_particles;
+  double sum = 0;
+  for (const auto& part : parts) sum += std::exp(part.log_w);
+  double cum = 0;
+  for (const auto& part : parts) cum += mrpt::square(std::exp(part.log_w) / sum);
+  return cum == 0 ? 0 : 1.0 / (parts.size() * cum);
+}
+
+void Localizer::normalizeWeights() {
+  auto& parts = mcl_.m_particles;
+  if (parts.empty()) return;
+  double top = parts.front().log_w;
+  for (const auto& part : parts) top = std::max(top, part.log_w);
+  for (auto& part : parts) part.log_w -= top;
+}
+
 void Localizer::initPose(const CPose2D& pose, double std_x, double std_y, double std_phi) {
   std::ostringstream where;
   where << "initial pose (" << pose.x() << ", " << pose.y() << ")";
@@ -612,7 +633,7 @@ StepResult Localizer::step(const CPose2D& odometry,
     // keeps its weight. While not converged, KLD keeps a share of the global
     // start's particles.
     const CPose2D expected = mean_ + pending_;
-    const bool resample = mcl_.ESS() < p_.resample_ess;
+    const bool resample = effectiveSampleRatio() < p_.resample_ess;
     auto& prior = prior_;  // log weights before the scan
     prior.clear();
     if (resample) {
@@ -648,7 +669,7 @@ StepResult Localizer::step(const CPose2D& odometry,
 
     r.beta = converged_ ? 1.0 : temperingExponent(prior, ll, p_.temper_ess, p_.temper_beta_min);
     for (size_t i = 0; i < n; ++i) mcl_.m_particles[i].log_w = prior[i] + r.beta * ll[i];
-    mcl_.normalizeWeights();
+    normalizeWeights();
     r.resampled = resample;
 
     if (!averages_set_) {

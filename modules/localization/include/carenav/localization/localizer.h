@@ -142,6 +142,8 @@ class Localizer {
   struct MotionSampler;
   void drawKld(const MotionSampler& motion, size_t n_min);
   void buildLikelihoodField();
+  double effectiveSampleRatio() const;
+  void normalizeWeights();
   void scanPoints(const mrpt::obs::CObservation2DRangeScan& scan, std::vector<float>& xs,
                   std::vector<float>& ys) const;
   double fieldLogLikelihood(const std::vector<float>& xs, const std::vector<float>& ys, double x,
