@@ -5,9 +5,17 @@
 #include <carenav/localization/localizer.h>
 #include <carenav/slam/scan_stream.h>
 
+#include <mrpt/bayes/CParticleFilter.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CActionRobotMovement2D.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/random/RandomGenerators.h>
+#include <mrpt/slam/CMonteCarloLocalization2D.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <stdexcept>
 
 namespace carenav::localization {
@@ -153,6 +161,127 @@ TEST(Localizer, InitialPoseOutsideTheMapOrOnAWallIsAnInputError) {
   ASSERT_TRUE(wall);
   EXPECT_THROW(loc.initPose(mrpt::poses::CPose2D(wall->first, wall->second, 0), 0.1, 0.1, 0.1),
                InputError);
+}
+
+// The particle weights come from a likelihood table built once for the map
+// (a distance transform); it must give what MRPT's own likelihood field
+// (lmLikelihoodField_Thrun, the same lf_* options, which searches a window
+// around each cell) gives for the same scan and pose: on the walls, in free
+// space, near the edge of the map and off it, for two sets of options.
+TEST(Localizer, LikelihoodTableGivesMrptsLikelihoodField) {
+  for (const double sigma : {0.20, 0.35}) {
+    LocalizationParams p;
+    p.lf_sigma = sigma;
+    p.lf_max_corr_dist = sigma > 0.3 ? 0.5 : 0.3;
+    p.lf_decimation = sigma > 0.3 ? 7 : 20;
+    Localizer loc(demoMap(), p);
+    // MRPT's model on a copy of the Localizer's grid (which carries the options).
+    io::COccupancyGridMap2D grid(loc.map());
+    ASSERT_EQ(grid.likelihoodOptions.likelihoodMethod,
+              io::COccupancyGridMap2D::lmLikelihoodField_Thrun);
+    slam::ScanStream stream(kRawlog, "");
+    slam::ScanStep s;
+    std::mt19937 gen(7);
+    std::uniform_real_distribution<double> ux(grid.getXMin() - 1, grid.getXMax() + 1),
+        uy(grid.getYMin() - 1, grid.getYMax() + 1), ua(-M_PI, M_PI);
+    size_t compared = 0, scans = 0;
+    double lo = 0, hi = -1e9;
+    while (stream.next(s)) {
+      if (scans++ % 4 != 0) continue;
+      for (int k = 0; k < 300; ++k) {
+        const mrpt::poses::CPose2D pose(ux(gen), uy(gen), ua(gen));
+        const double mrpt_ll =
+            grid.computeObservationLikelihood(*s.scan, mrpt::poses::CPose3D(pose));
+        const double ours = loc.scanLogLikelihood(*s.scan, pose);
+        // the same logs summed in the same order: equal up to rounding
+        ASSERT_NEAR(ours, mrpt_ll, 1e-9 * std::max(1.0, std::abs(mrpt_ll)))
+            << "scan " << scans << " pose " << pose;
+        lo = std::min(lo, mrpt_ll);
+        hi = std::max(hi, mrpt_ll);
+        ++compared;
+      }
+    }
+    EXPECT_EQ(compared, 10u * 300u);
+    EXPECT_LT(lo + 5, hi);  // the poses did see different likelihoods
+  }
+}
+
+// The Localizer runs MRPT's filter (standard proposal, Gaussian odometry
+// model, KLD draws, likelihood field) with its own faster code: from the same
+// particles and the same random generator state it must give the particles
+// MRPT's CMonteCarloLocalization2D gives, update after update (here without
+// tempering and recovery, which MRPT does not have).
+TEST(Localizer, UpdatesDrawTheParticlesMrptsFilterDraws) {
+  LocalizationParams p;
+  p.temper_ess = 0;
+  p.global_keep = 0;
+  p.global_min_std_xy = 0;
+  p.global_min_std_phi = 0;
+  p.recovery = false;
+  Localizer loc(demoMap(), p);
+  loc.initPose(mrpt::poses::CPose2D(3.7, -10.1, mrpt::DEG2RAD(-40.0)), 1.0, 1.0,
+               mrpt::DEG2RAD(20.0));
+  mrpt::slam::CMonteCarloLocalization2D ref;
+  ref.m_particles = loc.particles().m_particles;
+  ref.options.metricMap = std::make_shared<io::COccupancyGridMap2D>(loc.map());
+  auto& kld = ref.options.KLD_params;
+  kld.KLD_binSize_XY = p.kld_bin_xy;
+  kld.KLD_binSize_PHI = mrpt::DEG2RAD(p.kld_bin_phi);
+  kld.KLD_delta = p.kld_delta;
+  kld.KLD_epsilon = p.kld_epsilon;
+  kld.KLD_minSampleSize = static_cast<unsigned>(p.particles_min);
+  kld.KLD_maxSampleSize = static_cast<unsigned>(p.particles_max);
+  mrpt::bayes::CParticleFilter::TParticleFilterOptions pfo;
+  pfo.PF_algorithm = mrpt::bayes::CParticleFilter::pfStandardProposal;
+  pfo.resamplingMethod = mrpt::bayes::CParticleFilter::prMultinomial;
+
+  slam::ScanStream stream(kRawlog, "");
+  slam::ScanStep s;
+  std::vector<std::pair<mrpt::poses::CPose2D, mrpt::obs::CObservation2DRangeScan::Ptr>> log;
+  while (stream.next(s)) log.emplace_back(s.odometry.value_or(mrpt::poses::CPose2D()), s.scan);
+  ASSERT_EQ(log.size(), 37u);
+
+  std::vector<mrpt::poses::CPose2D> ours;
+  std::vector<size_t> ours_n;
+  std::vector<bool> resampled;
+  mrpt::random::getRandomGenerator().randomize(123);
+  for (const auto& [odo, scan] : log) {
+    const auto r = loc.step(odo, scan, 0);
+    ours.push_back(r.pose);
+    ours_n.push_back(r.particles);
+    resampled.push_back(r.resampled);
+  }
+  mrpt::random::getRandomGenerator().randomize(123);
+  size_t k = 0, draws = 0;
+  for (const auto& [odo, scan] : log) {
+    mrpt::obs::CActionRobotMovement2D act;
+    mrpt::obs::CActionRobotMovement2D::TMotionModelOptions mm;
+    mm.modelSelection = mrpt::obs::CActionRobotMovement2D::mmGaussian;
+    mm.gaussianModel.a1 = p.odom_a1;
+    mm.gaussianModel.a2 = mrpt::RAD2DEG(p.odom_a2);
+    mm.gaussianModel.a3 = mrpt::DEG2RAD(p.odom_a3);
+    mm.gaussianModel.a4 = p.odom_a4;
+    mm.gaussianModel.minStdXY = p.odom_min_std_xy;
+    mm.gaussianModel.minStdPHI = mrpt::DEG2RAD(p.odom_min_std_phi);
+    act.computeFromOdometry(odo, mm);
+    mrpt::obs::CActionCollection acts;
+    acts.insert(act);
+    mrpt::obs::CSensoryFrame sf;
+    sf.insert(scan);
+    pfo.adaptiveSampleSize = ref.ESS() < p.resample_ess;
+    ASSERT_EQ(pfo.adaptiveSampleSize, resampled[k]) << "update " << k;
+    draws += pfo.adaptiveSampleSize;
+    ref.prediction_and_update(&acts, &sf, pfo);
+    ref.normalizeWeights();
+    const auto [cov, mean] = ref.getCovarianceAndMean();
+    ASSERT_EQ(ref.m_particles.size(), ours_n[k]) << "update " << k;
+    EXPECT_NEAR(mean.x(), ours[k].x(), 1e-6) << "update " << k;
+    EXPECT_NEAR(mean.y(), ours[k].y(), 1e-6) << "update " << k;
+    EXPECT_NEAR(mrpt::math::wrapToPi(mean.phi() - ours[k].phi()), 0.0, 1e-6) << "update " << k;
+    ++k;
+  }
+  EXPECT_GT(draws, 5u);  // the KLD draw was exercised, not only the moves
+  expectNearMrpt(ours.back());
 }
 
 TEST(Localizer, StepBeforeInitIsALogicError) {

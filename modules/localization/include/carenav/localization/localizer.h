@@ -11,6 +11,7 @@
 #include <mrpt/slam/CMonteCarloLocalization2D.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -54,8 +55,12 @@ struct StepResult {
   double seconds = 0;               ///< CPU time of the filter update
 };
 
-/** MRPT's CMonteCarloLocalization2D with KLD-adaptive sample size and the
- *  grid's likelihood field, plus augmented-MCL recovery: short- and long-term
+/** Monte Carlo localisation as MRPT's CMonteCarloLocalization2D runs it
+ *  (standard proposal, KLD-adaptive sample size, the grid's likelihood field
+ *  lmLikelihoodField_Thrun; the same random draws, so a seed gives the same
+ *  particles), with the likelihood field tabled once for the whole map and the
+ *  particles moved and drawn in 2D (the particle set itself and its mean and
+ *  covariance stay MRPT's), plus augmented-MCL recovery: short- and long-term
  *  averages of the mean observation likelihood (w_fast, w_slow); after an
  *  update where w_fast/w_slow < 1, a share max(0, 1 - w_fast/w_slow) of the
  *  particles (at most max_inject_fraction) is replaced by random poses over
@@ -96,6 +101,14 @@ class Localizer {
   mrpt::poses::CPose2D pose() const;
   mrpt::math::CMatrixDouble33 covariance() const { return cov_; }
   size_t particleCount() const;
+  /** The particle set (poses and log weights). */
+  const mrpt::poses::CPosePDFParticles& particles() const { return mcl_; }
+  /** log p(scan | pose) under the grid's likelihood field, the value every
+   *  particle is weighed with: MRPT's lmLikelihoodField_Thrun model with the
+   *  lf_* parameters (see COccupancyGridMap2D::computeObservationLikelihood),
+   *  from a table built once for the whole map. */
+  double scanLogLikelihood(const mrpt::obs::CObservation2DRangeScan& scan,
+                           const mrpt::poses::CPose2D& pose) const;
   double spread() const { return spread_; }
   bool converged() const { return converged_; }
   /** Converging (after an init, not yet converged), Tracking (converged) or
@@ -126,6 +139,15 @@ class Localizer {
   void updateRotateRequest(double turned_rad, double t);
   size_t globalCount() const;
   void resetTracking();
+  struct MotionSampler;
+  void drawKld(const MotionSampler& motion, size_t n_min);
+  void buildLikelihoodField();
+  double effectiveSampleRatio() const;
+  void normalizeWeights();
+  void scanPoints(const mrpt::obs::CObservation2DRangeScan& scan, std::vector<float>& xs,
+                  std::vector<float>& ys) const;
+  double fieldLogLikelihood(const std::vector<float>& xs, const std::vector<float>& ys, double x,
+                            double y, double phi) const;
 
   LocalizationParams p_;
   std::shared_ptr<mrpt::maps::COccupancyGridMap2D> map_;
@@ -150,6 +172,25 @@ class Localizer {
   double stall_turn_ = 0;     // rad turned during them (or since the open request)
   std::vector<RotateRequest> rotate_requests_;
   double last_t_ = 0;  // time of the latest step
+  // likelihood field: log p of a point per cell (x + y * lf_sx_), and off the map
+  std::vector<double> lf_log_;
+  double lf_far_ = 0;
+  int lf_sx_ = 0, lf_sy_ = 0;
+  double lf_xmin_ = 0, lf_ymin_ = 0, lf_res_ = 1;
+  // scratch reused by every update
+  std::vector<float> pts_x_, pts_y_;
+  std::vector<mrpt::math::TPose2D> drawn_;
+  std::vector<double> log_w_;
+  struct FastDraw {
+    static constexpr size_t kBins = 20;
+    std::vector<double> pdf;
+    size_t start[kBins] = {};
+    std::vector<double> counts[kBins];
+    void prepare(const std::vector<double>& log_w);
+    size_t draw(double u) const;
+  } fast_draw_;
+  std::vector<uint64_t> bins_;  // KLD bins (hash table)
+  std::vector<double> prior_, ll_;
 };
 
 }  // namespace carenav::localization
