@@ -131,6 +131,33 @@ TEST(CliNavigate, GoalNavigationReachesTheGoalAndDoesNotForceAClosedDoor) {
   EXPECT_LT(jsonReal(run.json, "path_length_m").value_or(9), 0.1);
 }
 
+// People: a person walking head-on along the robot's lane (the robot must
+// move aside early: it is tracked and its lane kept out of the route), a
+// person crossing in front of the walker, out of and back into its
+// cameras' narrow view (hidden people are remembered), and the 80 cm door
+// entered on its axis.
+TEST(CliNavigate, PeopleAndTheDoorwayWithoutACollision) {
+  for (const auto& [scenario, plugin] :
+       std::vector<std::pair<std::string, std::string>>{{"goal-person-towards.yaml", "goal-dwa"},
+                                                        {"walker-person-crossing.yaml", ""},
+                                                        {"goal-doorway.yaml", "goal-dwa"}}) {
+    std::vector<std::string> extra;
+    if (!plugin.empty()) extra = {"--plugin", plugin};
+    const NavRun run = navigate(scenario, extra);
+    ASSERT_EQ(run.r.code, 0) << scenario << ": " << run.r.err;
+    EXPECT_TRUE(jsonTrue(run.json, "success")) << scenario << ": " << run.json;
+    EXPECT_EQ(jsonReal(run.json, "collisions"), 0.0) << scenario;
+  }
+  // Without tracking (and so without remembering hidden people) the walker
+  // meets the person; cutting the corner to the door wedges the robot.
+  NavRun off = navigate("walker-person-crossing.yaml", {"--set", "navigation.predict_horizon=0"});
+  ASSERT_EQ(off.r.code, 0) << off.r.err;
+  EXPECT_GT(jsonReal(off.json, "collisions").value_or(0), 0.0) << off.json;
+  off = navigate("goal-doorway.yaml", {"--plugin", "goal-dwa", "--set", "navigation.corner_deg=0"});
+  ASSERT_EQ(off.r.code, 0) << off.r.err;
+  EXPECT_FALSE(jsonTrue(off.json, "success")) << off.json;
+}
+
 // The mrpt-ptg plugin (MRPT's TP-space reactive navigation) on the same
 // corridor: it reaches the goal past the unmapped boxes without a collision.
 TEST(CliNavigate, MrptPtgPluginReachesTheCorridorGoal) {

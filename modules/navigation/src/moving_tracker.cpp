@@ -52,23 +52,29 @@ void MovingTracker::update(const std::vector<TPoint2D>& moved_in, double t) {
                           std::hypot(moved_in[i].x - m.centroid.x, moved_in[i].y - m.centroid.y));
     m.seen = t;
     m.sightings = 1;
-    // the nearest track by its constant-velocity prediction, within the gate
+    // The nearest track, by its constant-velocity prediction while fresh,
+    // else by where it was last seen, the gate widening with the time unseen.
     size_t best = tracks_.size();
-    double best_d = p_.gate;
+    double best_d = std::numeric_limits<double>::infinity();
     for (size_t k = 0; k < tracks_.size(); ++k) {
       if (used[k]) continue;
-      const double dt = t - tracks_[k].seen;
-      const double px = tracks_[k].centroid.x + tracks_[k].velocity.x * dt;
-      const double py = tracks_[k].centroid.y + tracks_[k].velocity.y * dt;
-      const double d = std::hypot(m.centroid.x - px, m.centroid.y - py);
-      if (d < best_d) best_d = d, best = k;
+      const MovingTrack& o = tracks_[k];
+      const double dt = t - o.seen;
+      double d = std::hypot(m.centroid.x - o.centroid.x, m.centroid.y - o.centroid.y);
+      if (dt <= p_.fresh)
+        d = std::min(d, std::hypot(m.centroid.x - o.centroid.x - o.velocity.x * dt,
+                                   m.centroid.y - o.centroid.y - o.velocity.y * dt));
+      const double gate = p_.gate + (dt > p_.fresh ? p_.hidden_speed * (dt - p_.fresh) : 0.0);
+      if (d < gate && d < best_d) best_d = d, best = k;
     }
     if (best < tracks_.size()) {
       used[best] = 1;
       const MovingTrack& prev = tracks_[best];
       m.sightings = prev.sightings + 1;
-      for (const auto& h : prev.history)
-        if (t - h.first <= p_.window) m.history.push_back(h);
+      m.walked = prev.walked;
+      if (t - prev.seen <= p_.fresh)  // a track back from hiding starts a new velocity
+        for (const auto& h : prev.history)
+          if (t - h.first <= p_.window) m.history.push_back(h);
     }
     m.history.push_back({t, m.centroid});
     m.velocity = {0, 0};
@@ -88,6 +94,7 @@ void MovingTracker::update(const std::vector<TPoint2D>& moved_in, double t) {
         const double s = std::hypot(v.x, v.y);
         if (s > p_.max_speed) v.x *= p_.max_speed / s, v.y *= p_.max_speed / s;
         m.velocity = v;
+        if (std::hypot(v.x, v.y) >= p_.min_speed && m.history.size() >= 3) m.walked = true;
       }
     }
     seen.push_back(m);
@@ -96,6 +103,23 @@ void MovingTracker::update(const std::vector<TPoint2D>& moved_in, double t) {
   for (size_t k = 0; k < tracks_.size(); ++k)
     if (!used[k]) seen.push_back(tracks_[k]);
   tracks_ = std::move(seen);
+  latest_ = t;
+}
+
+std::vector<TPoint2D> MovingTracker::hiddenRegions(double now, double step) const {
+  std::vector<TPoint2D> out;
+  if (!(step > 0)) return out;
+  for (const auto& k : tracks_) {
+    const double unseen = now - k.seen;
+    if (!k.walked || unseen <= p_.fresh || unseen > p_.keep) continue;
+    const double r = k.radius + std::min(p_.hidden_growth, p_.hidden_speed * (unseen - p_.fresh));
+    const int n = static_cast<int>(std::ceil(r / step));
+    for (int dy = -n; dy <= n; ++dy)
+      for (int dx = -n; dx <= n; ++dx)
+        if (std::hypot(dx, dy) * step <= r)
+          out.push_back({k.centroid.x + dx * step, k.centroid.y + dy * step});
+  }
+  return out;
 }
 
 std::vector<TPoint2D> MovingTracker::predictedPath(double horizon, double step,
@@ -103,7 +127,8 @@ std::vector<TPoint2D> MovingTracker::predictedPath(double horizon, double step,
   std::vector<TPoint2D> out;
   if (!(horizon > 0) || !(step > 0)) return out;
   for (const auto& k : tracks_) {
-    if (k.history.size() < 3) continue;  // two displacements before a velocity is trusted
+    if (k.history.size() < 3) continue;         // two displacements before a velocity is trusted
+    if (k.seen < latest_ - p_.fresh) continue;  // out of sight: hiddenRegions
     const double s = std::hypot(k.velocity.x, k.velocity.y);
     if (s < p_.min_speed) continue;
     const double len = s * horizon;

@@ -242,6 +242,11 @@ Navigator::Cycle Navigator::cycle(double now) {
     }
     std::vector<TPoint2D> all = moving_;
     all.insert(all.end(), predicted_.begin(), predicted_.end());
+    // People who walked out of sight nearby may step back in.
+    if (p_.predict_horizon > 0) {
+      const auto hidden = tracker_.hiddenRegions(now, p_.resolution);
+      all.insert(all.end(), hidden.begin(), hidden.end());
+    }
     map_.addMoving(all, grow);
   }
   c.obstacles = memory_.size();

@@ -74,8 +74,38 @@ TEST(MovingTracker, StandingClusterHasNoLaneAndOldTracksAreDropped) {
   EXPECT_TRUE(tr.predictedPath(2.0, 0.05).empty()) << "jitter is not walking";
   tr.update({}, 1.3);
   EXPECT_EQ(tr.tracks().size(), 1u) << "hidden for a moment: kept";
-  tr.update({}, 2.0);
+  EXPECT_TRUE(tr.hiddenRegions(2.0, 0.05).empty()) << "it never walked: no hidden person";
+  tr.update({}, 4.1);
   EXPECT_TRUE(tr.tracks().empty()) << "unseen for longer than keep";
+}
+
+TEST(MovingTracker, APersonWhoWalkedOutOfSightMayBeNearWhereSeenLast) {
+  std::mt19937 rng(9);
+  MovingTracker tr;
+  for (int k = 0; k <= 10; ++k) tr.update(personFront(3.0, 1.0 - 0.5 * 0.1 * k, rng), 0.1 * k);
+  ASSERT_EQ(tr.tracks().size(), 1u);
+  const TPoint2D last = tr.tracks()[0].centroid;
+  EXPECT_TRUE(tr.hiddenRegions(1.0, 0.05).empty()) << "still in sight";
+  EXPECT_FALSE(tr.predictedPath(2.0, 0.05).empty());
+  // Out of sight: no lane any more (its walk is not known), a disc growing
+  // with the time unseen around where it was last seen.
+  tr.update({}, 2.0);
+  EXPECT_TRUE(tr.predictedPath(2.0, 0.05).empty());
+  auto extent = [&](double now) {
+    double r = 0;
+    for (const auto& p : tr.hiddenRegions(now, 0.05))
+      r = std::max(r, std::hypot(p.x - last.x, p.y - last.y));
+    return r;
+  };
+  const double r2 = extent(2.0), r3 = extent(3.0);
+  EXPECT_GT(r2, 0.2);
+  EXPECT_GT(r3, r2 + 0.2) << "0.5 m/s unseen";
+  EXPECT_LT(extent(3.5), tr.tracks()[0].radius + 0.5 + 0.06) << "at most hidden_growth";
+  // Back in sight near there: the same track, a fresh velocity.
+  tr.update(personFront(last.x + 0.4, last.y, rng), 3.0);
+  ASSERT_EQ(tr.tracks().size(), 1u);
+  EXPECT_EQ(tr.tracks()[0].history.size(), 1u);
+  EXPECT_TRUE(tr.hiddenRegions(3.0, 0.05).empty());
 }
 
 TEST(MovingTracker, TwoPeopleKeepTheirOwnTracks) {

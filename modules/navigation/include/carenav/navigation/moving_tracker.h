@@ -15,24 +15,27 @@ namespace carenav::navigation {
 
 using mrpt::math::TPoint2D;
 
-/** Settings of the tracker (from [navigation]: track_link, track_gate,
- *  track_max_speed, track_keep, predict_horizon). */
+/** Settings of the tracker ([navigation] sets gate, from track_gate). */
 struct MovingTrackerParams {
   double link = 0.3;  ///< m, points closer than this belong to one cluster
   double gate = 0.6;  ///< m, a cluster continues a track whose predicted centroid is this close
-  double max_speed = 1.5;   ///< m/s, estimated speeds are capped here (a person walks below)
-  double min_speed = 0.15;  ///< m/s, slower tracks are not swept (centroid jitter)
-  double keep = 0.6;        ///< s, a track not seen this long is dropped
+  double max_speed = 1.5;      ///< m/s, estimated speeds are capped here (a person walks below)
+  double min_speed = 0.15;     ///< m/s, slower tracks are not swept (centroid jitter)
+  double fresh = 0.6;          ///< s, a track seen this recently is walking where it was seen
+  double keep = 3.0;           ///< s, a track not seen this long is dropped (till then: hidden)
+  double hidden_speed = 0.5;   ///< m/s, a hidden person may be this much farther each second
+  double hidden_growth = 0.5;  ///< m, ... up to this much
   double window = 1.5;  ///< s, the velocity is the least-squares slope of the centroids this long
 };
 
 /** One tracked moving obstacle (odometry frame). */
 struct MovingTrack {
-  TPoint2D centroid;  ///< m, centroid of its points at the last sighting
-  TPoint2D velocity;  ///< m/s, estimated
-  double radius = 0;  ///< m, largest distance of its points from the centroid
-  double seen = 0;    ///< s, time of the last sighting
-  int sightings = 0;  ///< cycles it was seen in
+  TPoint2D centroid;    ///< m, centroid of its points at the last sighting
+  TPoint2D velocity;    ///< m/s, estimated
+  double radius = 0;    ///< m, largest distance of its points from the centroid
+  double seen = 0;      ///< s, time of the last sighting
+  int sightings = 0;    ///< cycles it was seen in
+  bool walked = false;  ///< it was seen walking (above min_speed) at some time
   std::vector<std::pair<double, TPoint2D>> history;  ///< (time, centroid) within the window
 };
 
@@ -47,11 +50,19 @@ class MovingTracker {
    *  (excluded), across a lane as wide as the track's spread (its radius)
    *  plus `widen` on each side. Empty for horizon <= 0. */
   std::vector<TPoint2D> predictedPath(double horizon, double step, double widen = 0) const;
+  /** Where people who walked and went out of sight (not seen for more than
+   *  `fresh` seconds, but for less than `keep`) may be now: a disc per
+   *  track, its radius the track's spread grown by hidden_speed per second
+   *  unseen (at most hidden_growth), points every `step` metres. A person
+   *  who stepped out of a narrow field of view beside the robot may step
+   *  back into it. */
+  std::vector<TPoint2D> hiddenRegions(double now, double step) const;
   void clear() { tracks_.clear(); }
 
  private:
   MovingTrackerParams p_;
   std::vector<MovingTrack> tracks_;
+  double latest_ = -1e300;  // time of the last update
 };
 
 /** Single-link clusters of points (link distance `link`): indices per
