@@ -171,9 +171,30 @@ Footprint::Footprint(const std::vector<Point2>& poly, double spacing) : polygon(
       boundary.push_back({a.x + (b.x - a.x) * k / n, a.y + (b.y - a.y) * k / n});
   }
   if (!contains(0, 0)) inscribed = 0;  // origin outside its own footprint
-  for (double x = xmin + spacing / 2; x < xmax; x += spacing)
-    for (double y = ymin + spacing / 2; y < ymax; y += spacing)
-      if (contains(x, y)) interior.push_back({x, y});
+  // Interior samples tile by tile (4 x 4 samples), each tile a group.
+  const double tile = 4 * spacing;
+  for (double tx = xmin; tx < xmax; tx += tile)
+    for (double ty = ymin; ty < ymax; ty += tile) {
+      const size_t begin = interior.size();
+      for (double x = tx + spacing / 2; x < std::min(xmax, tx + tile); x += spacing)
+        for (double y = ty + spacing / 2; y < std::min(ymax, ty + tile); y += spacing)
+          if (contains(x, y)) interior.push_back({x, y});
+      if (interior.size() > begin) interior_groups.push_back({{}, 0, begin, interior.size()});
+    }
+  // The outline in runs of 6 samples.
+  for (size_t b = 0; b < boundary.size(); b += 6)
+    boundary_groups.push_back({{}, 0, b, std::min(boundary.size(), b + 6)});
+  auto enclose = [](std::vector<Group>& groups, const std::vector<TPoint2D>& pts) {
+    for (auto& g : groups) {
+      for (size_t i = g.begin; i < g.end; ++i) g.centre.x += pts[i].x, g.centre.y += pts[i].y;
+      g.centre.x /= static_cast<double>(g.end - g.begin);
+      g.centre.y /= static_cast<double>(g.end - g.begin);
+      for (size_t i = g.begin; i < g.end; ++i)
+        g.radius = std::max(g.radius, std::hypot(pts[i].x - g.centre.x, pts[i].y - g.centre.y));
+    }
+  };
+  enclose(boundary_groups, boundary);
+  enclose(interior_groups, interior);
 }
 
 bool Footprint::contains(double x, double y) const {
@@ -339,6 +360,10 @@ FootprintCheck LocalCostmap::check(const TPose2D& pose) const {
 }
 
 FootprintCheck LocalCostmap::check(const TPose2D& pose, double cap) const {
+  return check(pose, cap, std::cos(pose.phi), std::sin(pose.phi));
+}
+
+FootprintCheck LocalCostmap::check(const TPose2D& pose, double cap, double c, double s) const {
   FootprintCheck r;
   const double dc = distance(pose.x, pose.y);
   if (dc < 0) {
@@ -356,31 +381,52 @@ FootprintCheck LocalCostmap::check(const TPose2D& pose, double cap) const {
       r.outside = true;
     return r;
   }
-  const double c = std::cos(pose.phi), s = std::sin(pose.phi);
   double clearance = std::numeric_limits<double>::infinity();
-  for (const auto& b : fp_.boundary) {
-    const double d = distance(pose.x + c * b.x - s * b.y, pose.y + s * b.x + c * b.y);
-    if (d < 0) {
-      r.outside = true;
-      return r;
+  // A group's samples lie within its radius of its centre, and the distance
+  // of two cells differs by at most the distance of their centres (within
+  // 1.5 cells of the points'): a group whose centre is farther than that
+  // from every obstacle, beyond what the samples are tested against, is
+  // skipped (the answer is the same as sample by sample).
+  const double slack = 1.5 * res_;
+  // (Only where the whole footprint is on the grid: a sample off it must be seen.)
+  const bool on_grid = inside(pose.x + fp_.circumscribed, pose.y + fp_.circumscribed) &&
+                       inside(pose.x - fp_.circumscribed, pose.y - fp_.circumscribed);
+  const double need_b = std::max(cap + res_ * 0.5, contact_);
+  for (const auto& g : fp_.boundary_groups) {
+    const double gd = distance(pose.x + c * g.centre.x - s * g.centre.y,
+                               pose.y + s * g.centre.x + c * g.centre.y);
+    if (on_grid && gd - g.radius - slack >= need_b) continue;
+    for (size_t i = g.begin; i < g.end; ++i) {
+      const auto& b = fp_.boundary[i];
+      const double d = distance(pose.x + c * b.x - s * b.y, pose.y + s * b.x + c * b.y);
+      if (d < 0) {
+        r.outside = true;
+        return r;
+      }
+      // A cell centre closer than half a cell (plus the padding) counts as
+      // touching the outline.
+      if (d < contact_) {
+        r.collision = true;
+        r.clearance = 0;
+        return r;
+      }
+      clearance = std::min(clearance, d - res_ * 0.5);
     }
-    // A cell centre closer than half a cell (plus the padding) counts as
-    // touching the outline.
-    if (d < contact_) {
-      r.collision = true;
-      r.clearance = 0;
-      return r;
-    }
-    clearance = std::min(clearance, d - res_ * 0.5);
   }
   // An obstacle wholly inside the footprint is far from the outline: look
   // inside when the origin is close enough to anything for that to happen.
   if (dc < fp_.circumscribed + res_) {
-    for (const auto& q : fp_.interior) {
-      if (distance(pose.x + c * q.x - s * q.y, pose.y + s * q.x + c * q.y) < res_ * 0.75) {
-        r.collision = true;
-        r.clearance = 0;
-        return r;
+    for (const auto& g : fp_.interior_groups) {
+      const double gd = distance(pose.x + c * g.centre.x - s * g.centre.y,
+                                 pose.y + s * g.centre.x + c * g.centre.y);
+      if (on_grid && gd - g.radius - slack >= res_ * 0.75) continue;
+      for (size_t i = g.begin; i < g.end; ++i) {
+        const auto& q = fp_.interior[i];
+        if (distance(pose.x + c * q.x - s * q.y, pose.y + s * q.x + c * q.y) < res_ * 0.75) {
+          r.collision = true;
+          r.clearance = 0;
+          return r;
+        }
       }
     }
   }

@@ -13,8 +13,10 @@ TPose2D integrateArc(const TPose2D& p, double v, double w, double t) {
     return {p.x + v * t * std::cos(p.phi), p.y + v * t * std::sin(p.phi), p.phi};
   const double phi = p.phi + w * t;
   const double r = v / w;
-  return {p.x + r * (std::sin(phi) - std::sin(p.phi)), p.y - r * (std::cos(phi) - std::cos(p.phi)),
-          std::atan2(std::sin(phi), std::cos(phi))};
+  const double sp = std::sin(phi), cp = std::cos(phi);
+  // the heading wrapped to [-pi, pi] (what atan2(sin, cos) gives, cheaper)
+  return {p.x + r * (sp - std::sin(p.phi)), p.y - r * (cp - std::cos(p.phi)),
+          phi - 2 * M_PI * std::round(phi / (2 * M_PI))};
 }
 
 Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& cmd, double horizon,
@@ -35,10 +37,26 @@ Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& c
     check_steps =
         static_cast<int>(std::ceil(std::min(60.0, check_distance / std::abs(cmd.v)) / step - 1e-9));
   const double sweep = std::abs(cmd.v) + std::abs(cmd.w) * map.footprint().circumscribed;
+  // integrateArc, with the heading's sine and cosine kept for the footprint
+  const double s0 = std::sin(start.phi), c0 = std::cos(start.phi);
+  const bool straight = std::abs(cmd.w) < 1e-9;
+  const double radius = straight ? 0.0 : cmd.v / cmd.w;
   for (int k = 0; k <= check_steps; ++k) {
     const double t = k <= steps ? std::min(horizon, k * step) : k * step;
-    const TPose2D p = k == 0 ? start : integrateArc(start, cmd.v, cmd.w, t);
-    const FootprintCheck c = map.check(p, clearance_cap);
+    TPose2D p = start;
+    double sp = s0, cp = c0;
+    if (k > 0) {
+      if (straight) {
+        p = {start.x + cmd.v * t * c0, start.y + cmd.v * t * s0, start.phi};
+      } else {
+        const double phi = start.phi + cmd.w * t;
+        sp = std::sin(phi);
+        cp = std::cos(phi);
+        p = {start.x + radius * (sp - s0), start.y - radius * (cp - c0),
+             phi - 2 * M_PI * std::round(phi / (2 * M_PI))};
+      }
+    }
+    const FootprintCheck c = map.check(p, clearance_cap, cp, sp);
     if (c.outside) {
       if (k <= steps) tr.leaves_map = true;
       break;

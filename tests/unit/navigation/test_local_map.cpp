@@ -85,6 +85,81 @@ TEST(LocalCostmap, ClearanceToAWallAheadMatchesTheGeometry) {
   EXPECT_NEAR(m.check({-1.5, 0, 0}, 0.3).clearance, 0.3, 1e-9);
 }
 
+TEST(LocalCostmap, GroupedFootprintCheckAnswersAsSampleBySample) {
+  // check() skips runs of samples far from everything; its answers must be
+  // those of testing every sample (the rule written out here).
+  const Footprint fp = walker();
+  ASSERT_FALSE(fp.boundary_groups.empty());
+  ASSERT_FALSE(fp.interior_groups.empty());
+  size_t in_groups = 0;
+  for (const auto& g : fp.interior_groups) in_groups += g.end - g.begin;
+  EXPECT_EQ(in_groups, fp.interior.size());
+  const NavigationParams p = params();
+  LocalCostmap m(p, fp);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-3.5, 3.5), a(-M_PI, M_PI);
+  std::vector<TPoint2D> obstacles;
+  for (int i = 0; i < 60; ++i) obstacles.push_back({u(rng), u(rng)});
+  m.build({0, 0}, obstacles);
+  const double res = m.resolution();
+  const double contact = std::max(res * 0.5, p.footprint_padding + res * 0.5);
+  int collisions = 0, near = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const TPose2D pose{u(rng), u(rng), a(rng)};
+    const double cap = k % 2 ? 0.3 : 2.0;
+    const double c = std::cos(pose.phi), s = std::sin(pose.phi);
+    // sample by sample, after the bound by the centre's distance
+    bool outside = false, collision = false;
+    double clearance = std::numeric_limits<double>::infinity();
+    const double dc = m.distance(pose.x, pose.y);
+    if (dc < 0) {
+      EXPECT_TRUE(m.check(pose, cap).outside);
+      continue;
+    }
+    if (dc - fp.circumscribed - res - contact >= cap) {
+      const double r = fp.circumscribed;
+      const FootprintCheck got = m.check(pose, cap);
+      EXPECT_EQ(got.outside, !m.inside(pose.x + r, pose.y + r) || !m.inside(pose.x - r, pose.y - r));
+      EXPECT_FALSE(got.collision);
+      EXPECT_EQ(got.clearance, cap);
+      continue;
+    }
+    for (const auto& b : fp.boundary) {
+      const double d = m.distance(pose.x + c * b.x - s * b.y, pose.y + s * b.x + c * b.y);
+      if (d < 0) {
+        outside = true;
+        break;
+      }
+      if (d < contact) {
+        collision = true;
+        break;
+      }
+      clearance = std::min(clearance, d - res * 0.5);
+    }
+    if (!outside && !collision && m.distance(pose.x, pose.y) < fp.circumscribed + res)
+      for (const auto& q : fp.interior)
+        if (m.distance(pose.x + c * q.x - s * q.y, pose.y + s * q.x + c * q.y) < res * 0.75) {
+          collision = true;
+          break;
+        }
+    const FootprintCheck got = m.check(pose, cap);
+    if (outside) {
+      EXPECT_TRUE(got.outside) << k;
+      continue;
+    }
+    ASSERT_FALSE(got.outside) << k;
+    ASSERT_EQ(got.collision, collision) << k;
+    if (collision) {
+      ++collisions;
+      continue;
+    }
+    if (clearance < cap) ++near;
+    ASSERT_NEAR(got.clearance, std::min(clearance, cap), 1e-9) << k;
+  }
+  EXPECT_GT(collisions, 100);
+  EXPECT_GT(near, 1000);
+}
+
 TEST(LocalCostmap, AnObstacleInsideTheFootprintIsACollision) {
   LocalCostmap m(params(), walker());
   // A single post under the middle of the walker, far from its outline.

@@ -97,6 +97,15 @@ struct Footprint {
   double circumscribed = 0;        ///< m, smallest circle about the origin holding it
   std::vector<TPoint2D> boundary;  ///< samples along the outline (robot frame)
   std::vector<TPoint2D> interior;  ///< samples inside (robot frame)
+  /** Runs of neighbouring samples (of `boundary`, then of `interior`, which
+   *  are stored tile by tile) with the circle holding them: a run whose
+   *  centre is far enough from every obstacle needs no look at its samples. */
+  struct Group {
+    TPoint2D centre;
+    double radius = 0;
+    size_t begin = 0, end = 0;
+  };
+  std::vector<Group> boundary_groups, interior_groups;
   Footprint() = default;
   /** Samples the outline and the inside every `spacing` metres. Throws
    *  InputError for fewer than 3 vertices or no area. */
@@ -143,6 +152,8 @@ class LocalCostmap {
   /** Footprint clearance at the pose, capped at `cap` metres (cheaper when
    *  the robot is far from everything). */
   FootprintCheck check(const TPose2D& pose, double cap) const;
+  /** The same with the heading's cosine and sine given (rollouts have them). */
+  FootprintCheck check(const TPose2D& pose, double cap, double cos_phi, double sin_phi) const;
 
   const Footprint& footprint() const { return fp_; }
   double resolution() const { return res_; }
