@@ -10,6 +10,8 @@
 #include <cmath>
 #include <random>
 
+#include "fixtures.h"
+
 using namespace carenav;
 using namespace carenav::navigation;
 
@@ -130,15 +132,6 @@ TEST(MovingTracker, TwoPeopleKeepTheirOwnTracks) {
 
 namespace {
 
-RobotParams smallRobot() {
-  RobotParams r;
-  r.footprint = {{0.3, 0.25}, {-0.25, 0.25}, {-0.25, -0.25}, {0.3, -0.25}};
-  r.v_max = 0.25;
-  r.w_max = 1.0;
-  r.safe_distance = 0.1;
-  return r;
-}
-
 /** A lidar at the origin looking along +x (721 beams over 180 deg) in a
  *  corridor |y| < 1.5, with a 0.25 m person at (px, py). */
 mrpt::obs::CObservation2DRangeScan corridorScan(double px, double py) {
@@ -164,7 +157,7 @@ mrpt::obs::CObservation2DRangeScan corridorScan(double px, double py) {
 /** The robot stands at the origin while a person walks from x = 6 towards
  *  it along y = py for 2 s; the remembered obstacles for the route. */
 std::pair<std::vector<TPoint2D>, size_t> walkTowards(const NavigationParams& p, double py) {
-  Navigator n(p, smallRobot());
+  Navigator n(p, test::walkerRobot());
   for (int k = 0; k <= 20; ++k) {
     const double t = 0.1 * k;
     n.setOdometry({0, 0, 0}, {0, 0}, t);
@@ -206,7 +199,7 @@ TEST(Navigator, DepthFramesTellAPersonFromABox) {
   auto run = [](bool onFloor) {
     NavigationParams p;
     p.plugin = "goal-dwa";
-    Navigator n(p, smallRobot());
+    Navigator n(p, test::walkerRobot());
     std::vector<TPoint2D> floor, hits;
     for (double x = 1.0; x <= 3.0; x += 0.05)
       for (double y = -1.0; y <= 1.0; y += 0.05) {
