@@ -62,7 +62,13 @@ double CorrelativeMatcher::score(const std::vector<float>& xs, const std::vector
 
 mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMap& scan,
                                                const mrpt::poses::CPose2D& prior,
-                                               double* best_score) const {
+                                               double* best_score, double widen_xy,
+                                               double widen_yaw) const {
+  widen_xy = std::max(1.0, widen_xy);
+  widen_yaw = std::max(1.0, widen_yaw);
+  const double window_xy = p_.window_xy * widen_xy;
+  const double window_yaw = std::min(180.0, p_.window_yaw * widen_yaw);
+  const double weight_xy = p_.prior_weight / widen_xy, weight_yaw = p_.prior_weight / widen_yaw;
   const auto& sx = scan.getPointsBufferRef_x();
   const auto& sy = scan.getPointsBufferRef_y();
   std::vector<float> all_x(sx.begin(), sx.end()), all_y(sy.begin(), sy.end());
@@ -73,7 +79,7 @@ mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMa
   auto penalised = [&](double sc, double x, double y, double yaw) {
     const double d = std::hypot(x - prior.x(), y - prior.y());
     const double a = std::abs(std::remainder(yaw - prior.phi(), 2 * M_PI)) / (10 * deg);
-    return sc - p_.prior_weight * (d + a);
+    return sc - weight_xy * d - weight_yaw * a;
   };
   // Coarse pass over the whole window. The coarse step is a whole number of
   // table cells, so for each yaw the scan points are rotated and turned into
@@ -81,8 +87,8 @@ mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMa
   // offset of those indices (Olson 2009, sec. IV: the rotation is the only
   // costly part of evaluating a pose).
   double bx = prior.x(), by = prior.y(), byaw = prior.phi(), best = -1e9;
-  const int nxy = static_cast<int>(std::round(p_.window_xy / p_.coarse_xy));
-  const int nyaw = static_cast<int>(std::round(p_.window_yaw / p_.coarse_yaw));
+  const int nxy = static_cast<int>(std::round(window_xy / p_.coarse_xy));
+  const int nyaw = static_cast<int>(std::round(window_yaw / p_.coarse_yaw));
   const double cells_per_step = p_.coarse_xy / p_.cell;
   const int step = static_cast<int>(std::lround(cells_per_step));
   const bool integer_steps = step >= 1 && std::abs(cells_per_step - step) < 1e-6;
@@ -112,7 +118,7 @@ mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMa
     // penalised() spelled out: the heading part of the prior's penalty is
     // the same for the whole yaw, the distance part for every yaw.
     const double yaw_penalty =
-        p_.prior_weight * std::abs(std::remainder(yaw - prior.phi(), 2 * M_PI)) / (10 * deg);
+        weight_yaw * std::abs(std::remainder(yaw - prior.phi(), 2 * M_PI)) / (10 * deg);
     for (int i = -nxy; i <= nxy; ++i)
       for (int j = -nxy; j <= nxy; ++j) {
         const int ox = i * step, oy = j * step;
@@ -123,8 +129,7 @@ mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMa
           sum += table_[static_cast<size_t>(ty) * w_ + tx];
         }
         const double sc = (cx.empty() ? 0 : sum / cx.size()) -
-                          p_.prior_weight * dist[(i + nxy) * (2 * nxy + 1) + (j + nxy)] -
-                          yaw_penalty;
+                          weight_xy * dist[(i + nxy) * (2 * nxy + 1) + (j + nxy)] - yaw_penalty;
         if (sc > best) {
           best = sc;
           bx = prior.x() + i * p_.coarse_xy;

@@ -5,10 +5,12 @@
 // map as well as in the trajectory; MRPT's icp-slam cannot do that.
 #include <carenav/slam/correlative_matcher.h>
 #include <carenav/slam/mapper.h>
+#include <carenav/slam/robust_graph.h>
+
+#include <mrpt/graphslam/levmarq.h>
 
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/graphs/CNetworkOfPoses.h>
-#include <mrpt/graphslam/levmarq.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3DPDFGaussian.h>
@@ -154,11 +156,21 @@ class GraphMapper : public Mapper {
         last_cov_ = m.cov;
         matched = true;
         ++stats_.icp_accepted;
+        lost_ = 0;
       } else {
         // Without odometry a failed match must not extrapolate the last
-        // motion (a runaway spin): assume the robot stood still.
-        pose_ = have_odometry ? pose_ + guess : pose_;
+        // motion (a runaway spin): assume the robot stood still, unless the
+        // match is weak rather than wrong (at least half the goodness asked
+        // for: a scan that sees mostly what the submap lacks). Then its pose
+        // is kept, as the best guess there is (a robot turning 30 deg per
+        // scan is lost for good if it is held still), but linked to the graph
+        // only loosely (not `matched`).
+        if (have_odometry)
+          pose_ = pose_ + guess;
+        else if (m.goodness >= 0.5 * cfg_.slam.min_icp_goodness)
+          pose_ = m.pose;
         ++stats_.icp_rejected;
+        if (!have_odometry) ++lost_;
       }
     }
     if (!keyframes_.empty()) last_increment_ = pose_ - before;
@@ -216,28 +228,52 @@ class GraphMapper : public Mapper {
    *  starting points are tried (no motion, and both rotated by +-20 and
    *  +-40 deg), with a wide first pairing distance, and the best match kept. */
   Match matchToSubmap(const CPose2D& predicted, bool search) {
-    CPose2D start = predicted;
-    double start_score = 0;
-    if (search) {
-      // Without odometry the prediction (constant velocity) can be a metre
-      // and tens of degrees off: real logs turn 20-60 deg between scans (the
-      // Intel and CSAIL CARMEN logs). A correlative search over a window
-      // around it finds the basin; ICP refines.
-      // Two priors: constant velocity, and no motion (a robot that stops
-      // turning would otherwise be spun on by its own prediction).
-      double s_pred = 0, s_still = 0;
-      const CPose2D a = correlative_.match(*current_points_, predicted, &s_pred);
-      const CPose2D b = correlative_.match(*current_points_, pose_, &s_still);
-      start = s_still > s_pred + 0.02 ? b : a;
-      start_score = std::max(s_pred, s_still);
+    if (!search) return refine(predicted, 0, false);
+    // Without odometry the prediction (constant velocity) can be a metre
+    // and tens of degrees off: real logs turn 20-60 deg between scans (the
+    // Intel and CSAIL CARMEN logs). A correlative search over a window
+    // around it finds the basin; ICP refines.
+    // Two priors: constant velocity, and no motion (a robot that stops
+    // turning would otherwise be spun on by its own prediction).
+    // After failed matches the robot went on moving unseen (e.g. turning
+    // 30 deg per scan at a corridor's end, Intel log): the window around
+    // "no motion" widens with every failure in a row (x2, x3: +-70 deg and
+    // +-2 m, then +-105 deg and +-3 m), else a robot that kept turning is
+    // never found again.
+    if (lost_ > 0) {
+      double sc = 0;
+      const double widen = 1.0 + std::min<size_t>(lost_, 2);
+      const CPose2D start = correlative_.match(*current_points_, pose_, &sc, widen, widen);
+      return refine(start, sc, true);
     }
+    double s_pred = 0, s_still = 0;
+    const CPose2D a = correlative_.match(*current_points_, predicted, &s_pred);
+    const CPose2D b = correlative_.match(*current_points_, pose_, &s_still);
+    Match best = refine(s_still > s_pred + 0.02 ? b : a, std::max(s_pred, s_still), true);
+    if (best.goodness < cfg_.slam.min_icp_goodness) {
+      // A weak match: the robot may have turned more than the window (CSAIL
+      // log: 65 deg between two scans). Search three times the heading window
+      // and twice the distance window (+-2 m: the robot also moved) around no
+      // motion before giving up; keep it only if it is a sound match (a
+      // wider window also finds look-alikes metres away).
+      double sc = 0;
+      const CPose2D c = correlative_.match(*current_points_, pose_, &sc, 2.0, 3.0);
+      const Match wide = refine(c, sc, true);
+      if (wide.goodness >= cfg_.slam.min_icp_goodness && wide.goodness > best.goodness) best = wide;
+    }
+    return best;
+  }
+
+  /** ICP from `start` (a correlative match of score `start_score` when
+   *  `searched`). */
+  Match refine(const CPose2D& start, double start_score, bool searched) {
     Match best;
     mrpt::slam::CICP::TReturnInfo info;
     auto pdf = icp_.Align(&submap_, current_points_.get(), start, info);
     best.goodness = info.goodness;
     best.pose = pdf->getMeanVal();
     pdf->getCovariance(best.cov);
-    if (search && best.goodness < cfg_.slam.min_icp_goodness && start_score >= 0.5) {
+    if (searched && best.goodness < cfg_.slam.min_icp_goodness && start_score >= 0.5) {
       // ICP lost its pairs (thresholds too tight for this scan) but the
       // correlative match is sound: keep it, with its coarse uncertainty.
       best.pose = start;
@@ -391,10 +427,34 @@ class GraphMapper : public Mapper {
     return 1 - worst / vis.overlap >= s.loop_min_distinct;
   }
 
+  /** Optimises the graph robustly (robust_graph.h: loop edges under dynamic
+   *  covariance scaling, so a wrong match that survived the checks cannot
+   *  bend the map), then drops the loop closures the solution disagrees with
+   *  (residual over 0.3 m or 5 deg) and optimises again, a few rounds at
+   *  most. */
+  void optimise() {
+    if (!cfg_.slam.loop_robust) return optimisePlain();
+    std::set<mrpt::graphs::TNodeID> free;
+    for (size_t i = 0; i < keyframes_.size(); ++i)
+      if (!keyframes_[i].fixed && i != graph_.root) free.insert(i);
+    if (free.empty()) return;
+    RobustGraphOptions opt;
+    opt.robust = cfg_.slam.loop_robust;
+    opt.phi = cfg_.slam.loop_robust_phi;
+    const auto r = optimiseRobust(graph_, loop_edges_, free, opt);
+    stats_.optimisations += r.solves;
+    stats_.loop_closures -= r.rejected.size();
+    stats_.loop_rejected += r.rejected.size();
+    const CPose2D last_before = keyframes_.back().pose;
+    for (size_t i = 0; i < keyframes_.size(); ++i) keyframes_[i].pose = graph_.nodes[i];
+    // The robot moves with its last keyframe.
+    pose_ = keyframes_.back().pose + (pose_ - last_before);
+  }
+
   /** Optimises the graph, then drops loop closures the solution disagrees
    *  with (residual over 0.3 m or 5 deg: a wrong match that survived the
    *  checks) and optimises again, a few rounds at most. */
-  void optimise() {
+  void optimisePlain() {
     std::set<mrpt::graphs::TNodeID> free;
     for (size_t i = 0; i < keyframes_.size(); ++i)
       if (!keyframes_[i].fixed && i != graph_.root) free.insert(i);
@@ -487,6 +547,7 @@ class GraphMapper : public Mapper {
   std::vector<std::pair<size_t, size_t>> loop_edges_;
   CorrelativeMatcher correlative_{CorrelativeMatcher::Parameters{}};
   bool have_odometry_ = false;  // the log has shown odometry
+  size_t lost_ = 0;             // laser only: scan matches failed in a row
   CPose2D pose_, last_increment_;
   mrpt::math::CMatrixDouble33 last_cov_ = [] {
     mrpt::math::CMatrixDouble33 c;

@@ -51,7 +51,16 @@ const ParamTable<SlamParams>& SlamParams::table() {
                 "icp-graph: smallest share of that overlap lost when the match is moved "
                 "0.3 m in any direction (a match that can slide along a corridor is no fix)")
           .real("loop_max_correction", &SlamParams::loop_max_correction, "m", 0.01, 100,
-                "icp-graph: largest correction a loop closure may make");
+                "icp-graph: largest correction a loop closure may make")
+          .flag("loop_robust", &SlamParams::loop_robust,
+                "icp-graph: optimise the pose graph with dynamic covariance scaling of the "
+                "loop closures (carenav's weighted Levenberg-Marquardt; a closure that "
+                "disagrees loses weight instead of bending the map); false: MRPT's "
+                "Levenberg-Marquardt, every closure at full weight")
+          .real("loop_robust_phi", &SlamParams::loop_robust_phi, "", 0.001, 1000,
+                "icp-graph: dynamic covariance scaling's Phi: a loop closure whose squared "
+                "Mahalanobis residual chi2 exceeds it keeps the share (2 Phi / (Phi + chi2))^2 "
+                "of its information");
   return t;
 }
 

@@ -31,9 +31,13 @@ class CorrelativeMatcher {
   /** Builds the lookup table of the reference points (world frame). */
   void setReference(const mrpt::maps::CSimplePointsMap& ref);
   /** Best pose of the scan (points in the robot frame) near `prior`, and its
-   *  score: the mean closeness of the scan points, in [0, 1]. */
+   *  score: the mean closeness of the scan points, in [0, 1]. `widen_xy`,
+   *  `widen_yaw` > 1 multiply the window's half-widths (yaw at most 180 deg)
+   *  and divide the prior's distance and heading penalties by the same
+   *  factors (a prior that failed is worth less). */
   mrpt::poses::CPose2D match(const mrpt::maps::CSimplePointsMap& scan,
-                             const mrpt::poses::CPose2D& prior, double* score = nullptr) const;
+                             const mrpt::poses::CPose2D& prior, double* score = nullptr,
+                             double widen_xy = 1, double widen_yaw = 1) const;
 
  private:
   double lookup(double x, double y) const;
