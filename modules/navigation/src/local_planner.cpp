@@ -56,7 +56,10 @@ Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& c
              phi - 2 * M_PI * std::round(phi / (2 * M_PI))};
       }
     }
-    const FootprintCheck c = map.check(p, clearance_cap, cp, sp);
+    // Beyond the horizon only contact matters: no clearance wanted (cheaper);
+    // and once an arc has closed its circle, the rest repeats it.
+    if (k > steps && std::abs(cmd.w) * (t - step) >= 2 * M_PI) break;
+    const FootprintCheck c = map.check(p, k > steps ? 0.0 : clearance_cap, cp, sp);
     if (c.outside) {
       if (k <= steps) tr.leaves_map = true;
       break;

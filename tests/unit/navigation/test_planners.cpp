@@ -57,6 +57,27 @@ TEST(Arc, IntegrationIsExact) {
   EXPECT_NEAR(q.y, 2, 1e-12);
 }
 
+TEST(Rollout, BeyondTheHorizonContactIsStillFoundAndClosedCirclesEnd) {
+  NavigationParams p;
+  const RobotParams r = test::walkerRobot();
+  Footprint fp(r.footprint, p.resolution);
+  LocalCostmap map(p, fp);
+  // A slow arc (radius 0.4 m): the 1 s horizon covers 0.5 rad of it.
+  const Twist slow{0.2, 0.5};
+  map.build({0, 0}, {});
+  Trajectory free = rollout(map, {0, 0, 0}, slow, 1.0, 0.1, 0.3, 4.0);
+  EXPECT_TRUE(free.admissible());
+  EXPECT_TRUE(std::isinf(free.contact_time)) << "a closed circle in free space never touches";
+  // A post on the far side of that circle: met after about half a turn,
+  // beyond the horizon (contact only), at the right time.
+  map.build({0, 0}, {{0.0, 0.8}});
+  const Trajectory post = rollout(map, {0, 0, 0}, slow, 1.0, 0.1, 0.3, 4.0);
+  EXPECT_TRUE(post.admissible()) << "no contact within the horizon";
+  EXPECT_GT(post.contact_time, 1.0);
+  EXPECT_LT(post.contact_time, M_PI / 0.5);
+  EXPECT_NEAR(post.free_distance, post.contact_time * (0.2 + 0.5 * fp.circumscribed), 1e-9);
+}
+
 TEST(DynamicWindow, SeedSettingsGiveTwelveForwardAndTwelveBackward) {
   const Window w = dynamicWindow({0, 0}, walkerRobot(), walkerNav());
   EXPECT_NEAR(w.v_lo, -0.15, 1e-12);  // v_min reached within 0.5 s at 0.5 m/s^2

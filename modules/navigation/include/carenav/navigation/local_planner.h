@@ -49,7 +49,9 @@ struct Trajectory {
  *  the footprint at every step; clearance capped at `clearance_cap`. When
  *  the arc covers less than `check_distance` metres in the horizon, the
  *  collision check (only) goes on until it does, so that a slow trajectory
- *  is not taken for a free one because it stops short of the obstacle. */
+ *  is not taken for a free one because it stops short of the obstacle; an
+ *  arc that has closed its circle there is not followed further (the rest
+ *  repeats it, at the sampling resolution). */
 Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& cmd, double horizon,
                    double step, double clearance_cap, double check_distance = 0);
 
