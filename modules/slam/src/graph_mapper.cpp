@@ -4,6 +4,7 @@
 // The map is rebuilt from the optimised keyframes, so the loop closes in the
 // map as well as in the trajectory; MRPT's icp-slam cannot do that.
 #include <carenav/slam/correlative_matcher.h>
+#include <carenav/slam/loop_consistency.h>
 #include <carenav/slam/mapper.h>
 #include <carenav/slam/robust_graph.h>
 
@@ -20,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 namespace carenav::slam {
 
@@ -55,18 +57,31 @@ mrpt::poses::CPosePDFGaussianInf edge(const CPose2D& rel, double sxy, double sth
   return e;
 }
 
+/** An ICP covariance floored at 3 cm and 1 deg. */
+mrpt::math::CMatrixDouble33 flooredCov(const mrpt::math::CMatrixDouble33& cov) {
+  mrpt::math::CMatrixDouble33 c = cov;
+  c(0, 0) += 0.03 * 0.03;
+  c(1, 1) += 0.03 * 0.03;
+  c(2, 2) += (1.0 * kDeg) * (1.0 * kDeg);
+  return c;
+}
+
+mrpt::math::CMatrixDouble33 diagCov(double sxy, double sth) {
+  mrpt::math::CMatrixDouble33 c;
+  c.setZero();
+  c(0, 0) = c(1, 1) = sxy * sxy;
+  c(2, 2) = sth * sth;
+  return c;
+}
+
 /** An edge whose information is the ICP covariance (floored at 3 cm and
  *  1 deg): a match that slides along a corridor is trusted across it, not
  *  along it. */
 mrpt::poses::CPosePDFGaussianInf edgeFromCov(const CPose2D& rel,
                                              const mrpt::math::CMatrixDouble33& cov) {
-  mrpt::math::CMatrixDouble33 c = cov;
-  c(0, 0) += 0.03 * 0.03;
-  c(1, 1) += 0.03 * 0.03;
-  c(2, 2) += (1.0 * kDeg) * (1.0 * kDeg);
   mrpt::poses::CPosePDFGaussianInf e;
   e.mean = rel;
-  e.cov_inv = c.inverse_LLt();
+  e.cov_inv = flooredCov(cov).inverse_LLt();
   return e;
 }
 
@@ -181,6 +196,8 @@ class GraphMapper : public Mapper {
   }
 
   void finish() override {
+    if (cfg_.slam.loop_consistency && !keyframes_.empty())
+      resolveClosures(keyframes_.size() - 1, true);
     if (stats_.loop_closures > 0) optimise();
   }
 
@@ -303,7 +320,10 @@ class GraphMapper : public Mapper {
       graph_.insertEdge(id - 1, id,
                         matched ? edgeFromCov(pose_ - prev.pose, last_cov_)
                                 : edge(pose_ - prev.pose, 0.3, 5.0 * kDeg));
-      if (tryLoopClosures(id)) optimise();
+      chain_.add(PoseGaussian(pose_ - prev.pose,
+                              matched ? flooredCov(last_cov_) : diagCov(0.3, 5.0 * kDeg)));
+      const bool found = tryLoopClosures(id);
+      if (cfg_.slam.loop_consistency ? resolveClosures(id, false) : found) optimise();
     }
     rebuildSubmap();
   }
@@ -361,11 +381,86 @@ class GraphMapper : public Mapper {
         cov(1, 1) += 0.05 * 0.05;
         cov(2, 2) += (1.0 * kDeg) * (1.0 * kDeg);
       }
+      any = true;
+      if (cfg_.slam.loop_consistency) {
+        candidates_.push_back(
+            {next_candidate_id_++, {j, k, PoseGaussian(rel, flooredCov(cov))}, false});
+        continue;
+      }
       graph_.insertEdge(j, k, edgeFromCov(rel, cov));
       loop_edges_.emplace_back(j, k);
       ++stats_.loop_closures;
-      any = true;
     }
+    return any;
+  }
+
+  /** A loop closure that passed the checks of one match, waiting for
+   *  support from others (or in the graph already). */
+  struct Candidate {
+    size_t id;
+    LoopMeasurement m;
+    bool in_graph;
+  };
+
+  /** Pairwise consistency of loop closures (loop_consistency.h, Olson 2009,
+   *  Mangelson et al. 2018): the closures found in the last
+   *  kConsistencyWindow keyframes (those in the graph and those waiting) are
+   *  tested pair by pair against the odometry chain; the largest mutually
+   *  consistent set wins. Waiting closures in it enter the graph once it
+   *  holds closures from at least two keyframes (a single match, however
+   *  good, can be a look-alike place); waiting closures that leave the
+   *  window without such support are dropped. `final`: the log has ended,
+   *  no more support will come. Returns whether closures entered the graph. */
+  bool resolveClosures(size_t k, bool final) {
+    constexpr size_t kConsistencyWindow = 30;
+    // Forget closures that left the window; the waiting ones are dropped.
+    for (auto it = candidates_.begin(); it != candidates_.end();) {
+      if (it->m.to + kConsistencyWindow < k) {
+        if (!it->in_graph) ++stats_.loop_rejected;
+        it = candidates_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    bool waiting = false;
+    for (const auto& c : candidates_) waiting |= !c.in_graph;
+    if (!waiting) return false;
+    const size_t n = candidates_.size();
+    std::vector<std::vector<char>> adj(n, std::vector<char>(n, 0));
+    for (size_t a = 0; a < n; ++a)
+      for (size_t b = a + 1; b < n; ++b) {
+        const auto key = std::make_pair(candidates_[a].id, candidates_[b].id);
+        auto f = consistent_.find(key);
+        if (f == consistent_.end())
+          f = consistent_
+                  .emplace(key, pairwiseChi2(chain_, candidates_[a].m, candidates_[b].m) <=
+                                    cfg_.slam.loop_consistency_gate)
+                  .first;
+        adj[a][b] = adj[b][a] = f->second;
+      }
+    const std::vector<size_t> best = maximumClique(adj);
+    std::set<size_t> keyframes_seen;
+    for (size_t i : best) keyframes_seen.insert(candidates_[i].m.to);
+    bool any = false;
+    if (keyframes_seen.size() >= 2) {
+      for (size_t i : best) {
+        Candidate& c = candidates_[i];
+        if (c.in_graph) continue;
+        mrpt::poses::CPosePDFGaussianInf e;
+        e.mean = c.m.z.mean;
+        e.cov_inv = c.m.z.cov.inverse_LLt();
+        graph_.insertEdge(c.m.from, c.m.to, e);
+        loop_edges_.emplace_back(c.m.from, c.m.to);
+        ++stats_.loop_closures;
+        c.in_graph = true;
+        any = true;
+      }
+    }
+    if (final)
+      for (const auto& c : candidates_)
+        if (!c.in_graph) ++stats_.loop_rejected;
+    // Pairs of closures that left the window are not asked for again.
+    if (consistent_.size() > 100000) consistent_.clear();
     return any;
   }
 
@@ -529,8 +624,10 @@ class GraphMapper : public Mapper {
       const size_t id = keyframes_.size();
       keyframes_.push_back({p, scan, pts, true});
       graph_.nodes[id] = p;
-      if (id > 0)
+      if (id > 0) {
         graph_.insertEdge(id - 1, id, edge(p - keyframes_[id - 1].pose, 0.01, 0.2 * kDeg));
+        chain_.add(PoseGaussian(p - keyframes_[id - 1].pose, diagCov(0.01, 0.2 * kDeg)));
+      }
       pose_ = p;
     }
     rebuildSubmap();
@@ -545,6 +642,10 @@ class GraphMapper : public Mapper {
   CSimplePointsMap submap_;
   std::shared_ptr<CSimplePointsMap> current_points_;
   std::vector<std::pair<size_t, size_t>> loop_edges_;
+  OdometryChain chain_;                // keyframe to keyframe, as first matched
+  std::vector<Candidate> candidates_;  // closures of the last keyframes
+  size_t next_candidate_id_ = 0;
+  std::map<std::pair<size_t, size_t>, bool> consistent_;  // by candidate ids
   CorrelativeMatcher correlative_{CorrelativeMatcher::Parameters{}};
   bool have_odometry_ = false;  // the log has shown odometry
   size_t lost_ = 0;             // laser only: scan matches failed in a row
