@@ -34,6 +34,11 @@ constexpr double kDeg = M_PI / 180;
 constexpr size_t kSubmapKeyframes = 10;  // keyframes the scan-to-submap ICP uses
 constexpr size_t kLoopNeighbours = 2;    // keyframes each side in a loop candidate's submap
 constexpr size_t kLoopTries = 3;         // nearest candidates tried per keyframe
+// Visibility agreement a match of the front end's wide search needs with the
+// last keyframes' scans (CSAIL log: two look-alikes agreed 0.51 and 0.68; the
+// front end's right matches agree 0.82 and more, a few right after a failure
+// less, and those are not wide-search matches).
+constexpr double kWideMinAgreement = 0.8;
 
 struct Keyframe {
   CPose2D pose;  // current estimate, world frame
@@ -153,6 +158,7 @@ class GraphMapper : public Mapper {
     local->insertionOptions = insert_opts_;
     local->insertObservation(*scan);
     current_points_ = local;
+    current_scan_ = scan;
 
     if (step.odometry && step.index > 0) have_odometry_ = true;
     const CPose2D guess =
@@ -270,15 +276,56 @@ class GraphMapper : public Mapper {
     if (best.goodness < cfg_.slam.min_icp_goodness) {
       // A weak match: the robot may have turned more than the window (CSAIL
       // log: 65 deg between two scans). Search three times the heading window
-      // and twice the distance window (+-2 m: the robot also moved) around no
-      // motion before giving up; keep it only if it is a sound match (a
-      // wider window also finds look-alikes metres away).
-      double sc = 0;
-      const CPose2D c = correlative_.match(*current_points_, pose_, &sc, 2.0, 3.0);
-      const Match wide = refine(c, sc, true);
-      if (wide.goodness >= cfg_.slam.min_icp_goodness && wide.goodness > best.goodness) best = wide;
+      // (+-105 deg, as three sectors of +-35 deg centred 0 and +-70 deg off)
+      // and twice the distance window (+-2 m: the robot also moved) around
+      // both priors before giving up. The wide window also holds look-alikes
+      // metres away, and the single best of it can be one that hides the
+      // right basin (CSAIL scans 52 and 61: 1.5 m backwards at the right
+      // heading, +50 deg for -50 deg, both sound ICP matches): each sector
+      // gives its best, and a match is kept only if it is sound and agrees
+      // with what the last keyframes saw (recentAgreement at least
+      // kWideMinAgreement; those two agreed 0.68 and 0.51). The best such
+      // match wins.
+      for (const CPose2D& prior : {pose_, predicted})
+        for (const double off : {0.0, -70.0, 70.0}) {
+          double sc = 0;
+          const CPose2D centre(prior.x(), prior.y(), prior.phi() + off * kDeg);
+          const CPose2D c = correlative_.match(*current_points_, centre, &sc, 2.0, 1.0);
+          const Match wide = refine(c, sc, true);
+          if (wide.goodness < cfg_.slam.min_icp_goodness || wide.goodness <= best.goodness)
+            continue;
+          if (recentAgreement(wide.pose) >= kWideMinAgreement) best = wide;
+        }
     }
     return best;
+  }
+
+  /** Visibility agreement (scanVisibility) of the current scan placed at
+   *  `pose` with the last kAgreementKeyframes keyframes, both ways: the share
+   *  of the points that agree among those that agree or conflict (lie in
+   *  space the other scan saw free). */
+  double recentAgreement(const CPose2D& pose) const {
+    constexpr size_t kAgreementKeyframes = 3;
+    constexpr double kTol = 0.15;  // m
+    size_t agree = 0, conflict = 0;
+    const auto& pc = *current_points_;
+    std::vector<char> a(pc.size(), 0), c(pc.size(), 0);
+    const size_t n = keyframes_.size();
+    for (size_t i = n > kAgreementKeyframes ? n - kAgreementKeyframes : 0; i < n; ++i) {
+      const Keyframe& kf = keyframes_[i];
+      scanVisibility(pc, pose - kf.pose, *kf.scan, kTol, a, c);
+      std::vector<char> ak(kf.points->size(), 0), ck(kf.points->size(), 0);
+      scanVisibility(*kf.points, kf.pose - pose, *current_scan_, kTol, ak, ck);
+      for (size_t q = 0; q < ak.size(); ++q) {
+        agree += ak[q] != 0;
+        conflict += ak[q] == 0 && ck[q] != 0;
+      }
+    }
+    for (size_t q = 0; q < a.size(); ++q) {
+      agree += a[q] != 0;
+      conflict += a[q] == 0 && c[q] != 0;
+    }
+    return agree + conflict > 0 ? static_cast<double>(agree) / (agree + conflict) : 0.0;
   }
 
   /** ICP from `start` (a correlative match of score `start_score` when
@@ -641,6 +688,7 @@ class GraphMapper : public Mapper {
   mrpt::graphs::CNetworkOfPoses2DInf graph_;
   CSimplePointsMap submap_;
   std::shared_ptr<CSimplePointsMap> current_points_;
+  mrpt::obs::CObservation2DRangeScan::Ptr current_scan_;
   std::vector<std::pair<size_t, size_t>> loop_edges_;
   OdometryChain chain_;                // keyframe to keyframe, as first matched
   std::vector<Candidate> candidates_;  // closures of the last keyframes
