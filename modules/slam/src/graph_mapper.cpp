@@ -4,6 +4,7 @@
 // The map is rebuilt from the optimised keyframes, so the loop closes in the
 // map as well as in the trajectory; MRPT's icp-slam cannot do that.
 #include <carenav/slam/correlative_matcher.h>
+#include <carenav/slam/loop_consistency.h>
 #include <carenav/slam/mapper.h>
 #include <carenav/slam/robust_graph.h>
 
@@ -20,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 namespace carenav::slam {
 
@@ -32,6 +34,11 @@ constexpr double kDeg = M_PI / 180;
 constexpr size_t kSubmapKeyframes = 10;  // keyframes the scan-to-submap ICP uses
 constexpr size_t kLoopNeighbours = 2;    // keyframes each side in a loop candidate's submap
 constexpr size_t kLoopTries = 3;         // nearest candidates tried per keyframe
+// Visibility agreement a match of the front end's wide search needs with the
+// last keyframes' scans (CSAIL log: two look-alikes agreed 0.51 and 0.68; the
+// front end's right matches agree 0.82 and more, a few right after a failure
+// less, and those are not wide-search matches).
+constexpr double kWideMinAgreement = 0.8;
 
 struct Keyframe {
   CPose2D pose;  // current estimate, world frame
@@ -55,18 +62,31 @@ mrpt::poses::CPosePDFGaussianInf edge(const CPose2D& rel, double sxy, double sth
   return e;
 }
 
+/** An ICP covariance floored at 3 cm and 1 deg. */
+mrpt::math::CMatrixDouble33 flooredCov(const mrpt::math::CMatrixDouble33& cov) {
+  mrpt::math::CMatrixDouble33 c = cov;
+  c(0, 0) += 0.03 * 0.03;
+  c(1, 1) += 0.03 * 0.03;
+  c(2, 2) += (1.0 * kDeg) * (1.0 * kDeg);
+  return c;
+}
+
+mrpt::math::CMatrixDouble33 diagCov(double sxy, double sth) {
+  mrpt::math::CMatrixDouble33 c;
+  c.setZero();
+  c(0, 0) = c(1, 1) = sxy * sxy;
+  c(2, 2) = sth * sth;
+  return c;
+}
+
 /** An edge whose information is the ICP covariance (floored at 3 cm and
  *  1 deg): a match that slides along a corridor is trusted across it, not
  *  along it. */
 mrpt::poses::CPosePDFGaussianInf edgeFromCov(const CPose2D& rel,
                                              const mrpt::math::CMatrixDouble33& cov) {
-  mrpt::math::CMatrixDouble33 c = cov;
-  c(0, 0) += 0.03 * 0.03;
-  c(1, 1) += 0.03 * 0.03;
-  c(2, 2) += (1.0 * kDeg) * (1.0 * kDeg);
   mrpt::poses::CPosePDFGaussianInf e;
   e.mean = rel;
-  e.cov_inv = c.inverse_LLt();
+  e.cov_inv = flooredCov(cov).inverse_LLt();
   return e;
 }
 
@@ -138,6 +158,7 @@ class GraphMapper : public Mapper {
     local->insertionOptions = insert_opts_;
     local->insertObservation(*scan);
     current_points_ = local;
+    current_scan_ = scan;
 
     if (step.odometry && step.index > 0) have_odometry_ = true;
     const CPose2D guess =
@@ -181,6 +202,8 @@ class GraphMapper : public Mapper {
   }
 
   void finish() override {
+    if (cfg_.slam.loop_consistency && !keyframes_.empty())
+      resolveClosures(keyframes_.size() - 1, true);
     if (stats_.loop_closures > 0) optimise();
   }
 
@@ -253,15 +276,56 @@ class GraphMapper : public Mapper {
     if (best.goodness < cfg_.slam.min_icp_goodness) {
       // A weak match: the robot may have turned more than the window (CSAIL
       // log: 65 deg between two scans). Search three times the heading window
-      // and twice the distance window (+-2 m: the robot also moved) around no
-      // motion before giving up; keep it only if it is a sound match (a
-      // wider window also finds look-alikes metres away).
-      double sc = 0;
-      const CPose2D c = correlative_.match(*current_points_, pose_, &sc, 2.0, 3.0);
-      const Match wide = refine(c, sc, true);
-      if (wide.goodness >= cfg_.slam.min_icp_goodness && wide.goodness > best.goodness) best = wide;
+      // (+-105 deg, as three sectors of +-35 deg centred 0 and +-70 deg off)
+      // and twice the distance window (+-2 m: the robot also moved) around
+      // both priors before giving up. The wide window also holds look-alikes
+      // metres away, and the single best of it can be one that hides the
+      // right basin (CSAIL scans 52 and 61: 1.5 m backwards at the right
+      // heading, +50 deg for -50 deg, both sound ICP matches): each sector
+      // gives its best, and a match is kept only if it is sound and agrees
+      // with what the last keyframes saw (recentAgreement at least
+      // kWideMinAgreement; those two agreed 0.68 and 0.51). The best such
+      // match wins.
+      for (const CPose2D& prior : {pose_, predicted})
+        for (const double off : {0.0, -70.0, 70.0}) {
+          double sc = 0;
+          const CPose2D centre(prior.x(), prior.y(), prior.phi() + off * kDeg);
+          const CPose2D c = correlative_.match(*current_points_, centre, &sc, 2.0, 1.0);
+          const Match wide = refine(c, sc, true);
+          if (wide.goodness < cfg_.slam.min_icp_goodness || wide.goodness <= best.goodness)
+            continue;
+          if (recentAgreement(wide.pose) >= kWideMinAgreement) best = wide;
+        }
     }
     return best;
+  }
+
+  /** Visibility agreement (scanVisibility) of the current scan placed at
+   *  `pose` with the last kAgreementKeyframes keyframes, both ways: the share
+   *  of the points that agree among those that agree or conflict (lie in
+   *  space the other scan saw free). */
+  double recentAgreement(const CPose2D& pose) const {
+    constexpr size_t kAgreementKeyframes = 3;
+    constexpr double kTol = 0.15;  // m
+    size_t agree = 0, conflict = 0;
+    const auto& pc = *current_points_;
+    std::vector<char> a(pc.size(), 0), c(pc.size(), 0);
+    const size_t n = keyframes_.size();
+    for (size_t i = n > kAgreementKeyframes ? n - kAgreementKeyframes : 0; i < n; ++i) {
+      const Keyframe& kf = keyframes_[i];
+      scanVisibility(pc, pose - kf.pose, *kf.scan, kTol, a, c);
+      std::vector<char> ak(kf.points->size(), 0), ck(kf.points->size(), 0);
+      scanVisibility(*kf.points, kf.pose - pose, *current_scan_, kTol, ak, ck);
+      for (size_t q = 0; q < ak.size(); ++q) {
+        agree += ak[q] != 0;
+        conflict += ak[q] == 0 && ck[q] != 0;
+      }
+    }
+    for (size_t q = 0; q < a.size(); ++q) {
+      agree += a[q] != 0;
+      conflict += a[q] == 0 && c[q] != 0;
+    }
+    return agree + conflict > 0 ? static_cast<double>(agree) / (agree + conflict) : 0.0;
   }
 
   /** ICP from `start` (a correlative match of score `start_score` when
@@ -303,7 +367,10 @@ class GraphMapper : public Mapper {
       graph_.insertEdge(id - 1, id,
                         matched ? edgeFromCov(pose_ - prev.pose, last_cov_)
                                 : edge(pose_ - prev.pose, 0.3, 5.0 * kDeg));
-      if (tryLoopClosures(id)) optimise();
+      chain_.add(PoseGaussian(pose_ - prev.pose,
+                              matched ? flooredCov(last_cov_) : diagCov(0.3, 5.0 * kDeg)));
+      const bool found = tryLoopClosures(id);
+      if (cfg_.slam.loop_consistency ? resolveClosures(id, false) : found) optimise();
     }
     rebuildSubmap();
   }
@@ -361,11 +428,86 @@ class GraphMapper : public Mapper {
         cov(1, 1) += 0.05 * 0.05;
         cov(2, 2) += (1.0 * kDeg) * (1.0 * kDeg);
       }
+      any = true;
+      if (cfg_.slam.loop_consistency) {
+        candidates_.push_back(
+            {next_candidate_id_++, {j, k, PoseGaussian(rel, flooredCov(cov))}, false});
+        continue;
+      }
       graph_.insertEdge(j, k, edgeFromCov(rel, cov));
       loop_edges_.emplace_back(j, k);
       ++stats_.loop_closures;
-      any = true;
     }
+    return any;
+  }
+
+  /** A loop closure that passed the checks of one match, waiting for
+   *  support from others (or in the graph already). */
+  struct Candidate {
+    size_t id;
+    LoopMeasurement m;
+    bool in_graph;
+  };
+
+  /** Pairwise consistency of loop closures (loop_consistency.h, Olson 2009,
+   *  Mangelson et al. 2018): the closures found in the last
+   *  kConsistencyWindow keyframes (those in the graph and those waiting) are
+   *  tested pair by pair against the odometry chain; the largest mutually
+   *  consistent set wins. Waiting closures in it enter the graph once it
+   *  holds closures from at least two keyframes (a single match, however
+   *  good, can be a look-alike place); waiting closures that leave the
+   *  window without such support are dropped. `final`: the log has ended,
+   *  no more support will come. Returns whether closures entered the graph. */
+  bool resolveClosures(size_t k, bool final) {
+    constexpr size_t kConsistencyWindow = 30;
+    // Forget closures that left the window; the waiting ones are dropped.
+    for (auto it = candidates_.begin(); it != candidates_.end();) {
+      if (it->m.to + kConsistencyWindow < k) {
+        if (!it->in_graph) ++stats_.loop_rejected;
+        it = candidates_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    bool waiting = false;
+    for (const auto& c : candidates_) waiting |= !c.in_graph;
+    if (!waiting) return false;
+    const size_t n = candidates_.size();
+    std::vector<std::vector<char>> adj(n, std::vector<char>(n, 0));
+    for (size_t a = 0; a < n; ++a)
+      for (size_t b = a + 1; b < n; ++b) {
+        const auto key = std::make_pair(candidates_[a].id, candidates_[b].id);
+        auto f = consistent_.find(key);
+        if (f == consistent_.end())
+          f = consistent_
+                  .emplace(key, pairwiseChi2(chain_, candidates_[a].m, candidates_[b].m) <=
+                                    cfg_.slam.loop_consistency_gate)
+                  .first;
+        adj[a][b] = adj[b][a] = f->second;
+      }
+    const std::vector<size_t> best = maximumClique(adj);
+    std::set<size_t> keyframes_seen;
+    for (size_t i : best) keyframes_seen.insert(candidates_[i].m.to);
+    bool any = false;
+    if (keyframes_seen.size() >= 2) {
+      for (size_t i : best) {
+        Candidate& c = candidates_[i];
+        if (c.in_graph) continue;
+        mrpt::poses::CPosePDFGaussianInf e;
+        e.mean = c.m.z.mean;
+        e.cov_inv = c.m.z.cov.inverse_LLt();
+        graph_.insertEdge(c.m.from, c.m.to, e);
+        loop_edges_.emplace_back(c.m.from, c.m.to);
+        ++stats_.loop_closures;
+        c.in_graph = true;
+        any = true;
+      }
+    }
+    if (final)
+      for (const auto& c : candidates_)
+        if (!c.in_graph) ++stats_.loop_rejected;
+    // Pairs of closures that left the window are not asked for again.
+    if (consistent_.size() > 100000) consistent_.clear();
     return any;
   }
 
@@ -529,8 +671,10 @@ class GraphMapper : public Mapper {
       const size_t id = keyframes_.size();
       keyframes_.push_back({p, scan, pts, true});
       graph_.nodes[id] = p;
-      if (id > 0)
+      if (id > 0) {
         graph_.insertEdge(id - 1, id, edge(p - keyframes_[id - 1].pose, 0.01, 0.2 * kDeg));
+        chain_.add(PoseGaussian(p - keyframes_[id - 1].pose, diagCov(0.01, 0.2 * kDeg)));
+      }
       pose_ = p;
     }
     rebuildSubmap();
@@ -544,7 +688,12 @@ class GraphMapper : public Mapper {
   mrpt::graphs::CNetworkOfPoses2DInf graph_;
   CSimplePointsMap submap_;
   std::shared_ptr<CSimplePointsMap> current_points_;
+  mrpt::obs::CObservation2DRangeScan::Ptr current_scan_;
   std::vector<std::pair<size_t, size_t>> loop_edges_;
+  OdometryChain chain_;                // keyframe to keyframe, as first matched
+  std::vector<Candidate> candidates_;  // closures of the last keyframes
+  size_t next_candidate_id_ = 0;
+  std::map<std::pair<size_t, size_t>, bool> consistent_;  // by candidate ids
   CorrelativeMatcher correlative_{CorrelativeMatcher::Parameters{}};
   bool have_odometry_ = false;  // the log has shown odometry
   size_t lost_ = 0;             // laser only: scan matches failed in a row

@@ -156,7 +156,10 @@ RobustGraphResult optimiseRobust(Graph& graph, std::vector<std::pair<size_t, siz
     graph.nodes = start;
     // The loop edges and their own information, to scale and restore.
     std::vector<std::pair<EdgeIt, mrpt::math::CMatrixDouble33>> edges;
-    for (const auto& [j, k] : loops) {
+    // Each pair once: equal_range already yields every edge of a pair, and
+    // an edge listed twice would be erased twice below.
+    const std::set<std::pair<size_t, size_t>> pairs(loops.begin(), loops.end());
+    for (const auto& [j, k] : pairs) {
       auto range = graph.edges.equal_range({j, k});
       for (auto e = range.first; e != range.second; ++e) edges.emplace_back(e, e->second.cov_inv);
     }

@@ -52,6 +52,16 @@ const ParamTable<SlamParams>& SlamParams::table() {
                 "0.3 m in any direction (a match that can slide along a corridor is no fix)")
           .real("loop_max_correction", &SlamParams::loop_max_correction, "m", 0.01, 100,
                 "icp-graph: largest correction a loop closure may make")
+          .flag("loop_consistency", &SlamParams::loop_consistency,
+                "icp-graph: loop closures enter the graph only in groups that agree pair by "
+                "pair with the odometry between them (pairwise consistency, the largest "
+                "consistent set of the closures of the last 30 keyframes, from at least two "
+                "keyframes); false: every closure that passes its own checks enters at once. "
+                "Off by default: it did not make the CSAIL or Intel logs better (docs/slam.md)")
+          .real("loop_consistency_gate", &SlamParams::loop_consistency_gate, "", 0.1, 1000,
+                "icp-graph: two loop closures agree when the squared Mahalanobis distance of "
+                "the cycle they close with the odometry is at most this (chi-square, 3 "
+                "degrees of freedom: 11.34 is the 99 % quantile)")
           .flag("loop_robust", &SlamParams::loop_robust,
                 "icp-graph: optimise the pose graph with dynamic covariance scaling of the "
                 "loop closures (carenav's weighted Levenberg-Marquardt; a closure that "

@@ -50,13 +50,14 @@ struct MapRun {
 };
 
 MapRun map(const std::string& rawlog, const std::string& method, const fs::path& out,
-           double loop_search_radius = 4.0) {
+           double loop_search_radius = 4.0, bool loop_consistency = false) {
   slam::SlamJobOptions o;
   o.rawlog = rawlog;
   o.out_dir = out.string();
   o.method = method;
   o.progress = false;
   o.mapper.slam.loop_search_radius = loop_search_radius;
+  o.mapper.slam.loop_consistency = loop_consistency;
   MapRun r;
   r.result = slam::runSlam(o);
   const auto est = io::readTum((out / "trajectory.tum").string());
@@ -84,6 +85,12 @@ TEST(SlamGraphSimulated, ClosesALoopRevisitedFromAnotherHeading) {
   EXPECT_LT(closed.ate, 0.05);
   // The end of the loop is the start again.
   EXPECT_LT(closed.result.final_pose.norm(), 0.15);
+  // With the pairwise consistency check (slam.loop_consistency) the
+  // closures of the revisit support each other and still enter the graph.
+  const MapRun checked = map(rawlog, "icp-graph", dir / "checked", 4.0, true);
+  EXPECT_GE(checked.result.stats.loop_closures, 3u);
+  EXPECT_LT(checked.ate, 0.05);
+  EXPECT_LT(checked.result.final_pose.norm(), 0.15);
 }
 
 TEST(SlamGraphSimulated, StraightRunWithoutRevisitIsLeftAlone) {

@@ -36,8 +36,10 @@ struct SlamParams {
   double loop_min_overlap = 0.25;    ///< [0,1] share of both scans' points seen by the other
   double loop_min_distinct = 0.15;   ///< [0,1] overlap lost when the match moves 0.3 m
   double loop_max_correction = 3.0;  ///< m, largest loop-closure correction accepted
-  bool loop_robust = false;          ///< dynamic covariance scaling of loop edges
-  double loop_robust_phi = 1.0;      ///< DCS Phi: chi2 above it scales a closure down
+  bool loop_consistency = false;     ///< closures enter the graph in pairwise-consistent groups
+  double loop_consistency_gate = 11.34;  ///< chi2 (3 dof) of two consistent closures' cycle
+  bool loop_robust = false;              ///< dynamic covariance scaling of loop edges
+  double loop_robust_phi = 1.0;          ///< DCS Phi: chi2 above it scales a closure down
   static const ParamTable<SlamParams>& table();
 };
 
