@@ -16,28 +16,17 @@
 #include <cmath>
 #include <random>
 
+#include "square_laps.h"
+
 using namespace carenav::slam;
 using mrpt::poses::CPose2D;
 using Graph = mrpt::graphs::CNetworkOfPoses2DInf;
 
 namespace {
 
-constexpr double kDeg = M_PI / 180;
-
-mrpt::math::CMatrixDouble33 diag(double sxy, double sth) {
-  mrpt::math::CMatrixDouble33 c;
-  c.setZero();
-  c(0, 0) = c(1, 1) = sxy * sxy;
-  c(2, 2) = sth * sth;
-  return c;
-}
-
-mrpt::poses::CPosePDFGaussianInf edge(const CPose2D& rel, double sxy, double sth) {
-  mrpt::poses::CPosePDFGaussianInf e;
-  e.mean = rel;
-  e.cov_inv = diag(sxy, sth).inverse_LLt();
-  return e;
-}
+using test::diag;
+using test::edge;
+using test::kDeg;
 
 struct Scenario {
   Graph graph;
@@ -59,21 +48,15 @@ void addLoop(Scenario& s, size_t j, size_t i, const CPose2D& z, double sxy, doub
  *  the same look-alike place (so each group is self-consistent). */
 Scenario makeScenario(size_t n_groups, size_t group, unsigned seed) {
   Scenario s;
-  const size_t lap = 80;
-  for (size_t i = 0; i < 2 * lap; ++i) {
-    const size_t q = i % lap, side = q / 20, along = q % 20;
-    const double d = 0.5 * along;
-    const double x[] = {d, 10, 10 - d, 0}, y[] = {0, d, 10, 10 - d};
-    s.truth.emplace_back(x[side], y[side], side * 90 * kDeg);
-  }
+  const size_t lap = test::SquareLaps::kLap;
   std::mt19937 rng(seed);
   std::normal_distribution<double> nxy(0, 0.01), nth(0, 0.2 * kDeg);
+  const test::SquareLaps laps = test::squareLaps(rng, nxy, nth);
+  s.truth = laps.truth;
   CPose2D p = s.truth[0];
   s.graph.nodes[0] = p;
   for (size_t i = 1; i < s.truth.size(); ++i) {
-    const CPose2D t = s.truth[i] - s.truth[i - 1];
-    // 0.6 deg heading bias per step: the odometry drifts 48 deg a lap.
-    const CPose2D z(t.x() + nxy(rng), t.y() + nxy(rng), t.phi() + 0.6 * kDeg + nth(rng));
+    const CPose2D& z = laps.odometry[i];
     s.graph.insertEdge(i - 1, i, edge(z, 0.03, 1 * kDeg));
     s.chain.add(PoseGaussian(z, diag(0.03, 1 * kDeg)));
     p = p + z;

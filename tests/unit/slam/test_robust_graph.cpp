@@ -11,22 +11,16 @@
 #include <cmath>
 #include <random>
 
+#include "square_laps.h"
+
 using namespace carenav::slam;
 using mrpt::poses::CPose2D;
 using Graph = mrpt::graphs::CNetworkOfPoses2DInf;
 
 namespace {
 
-constexpr double kDeg = M_PI / 180;
-
-mrpt::poses::CPosePDFGaussianInf edge(const CPose2D& rel, double sxy, double sth) {
-  mrpt::poses::CPosePDFGaussianInf e;
-  e.mean = rel;
-  e.cov_inv.setZero();
-  e.cov_inv(0, 0) = e.cov_inv(1, 1) = 1 / (sxy * sxy);
-  e.cov_inv(2, 2) = 1 / (sth * sth);
-  return e;
-}
+using test::edge;
+using test::kDeg;
 
 struct Scenario {
   Graph graph;
@@ -37,24 +31,16 @@ struct Scenario {
 /** Two laps of a 10 x 10 m square, a pose every 0.5 m (80 per lap). */
 Scenario makeScenario(size_t n_wrong, unsigned seed) {
   Scenario s;
-  const size_t lap = 80;
-  for (size_t i = 0; i < 2 * lap; ++i) {
-    const size_t q = i % lap, side = q / 20, along = q % 20;
-    const double d = 0.5 * along;
-    const double x[] = {d, 10, 10 - d, 0}, y[] = {0, d, 10, 10 - d};
-    s.truth.emplace_back(x[side], y[side], side * 90 * kDeg);
-  }
+  const size_t lap = test::SquareLaps::kLap;
   std::mt19937 rng(seed);
   std::normal_distribution<double> nxy(0, 0.01), nth(0, 0.2 * kDeg);
-  // Odometry: the true increment, noise and a 0.6 deg bias per step (15 deg
-  // off after a lap): the estimate the graph starts from drifts.
+  const test::SquareLaps laps = test::squareLaps(rng, nxy, nth);
+  s.truth = laps.truth;
   CPose2D p = s.truth[0];
   s.graph.nodes[0] = p;
   for (size_t i = 1; i < s.truth.size(); ++i) {
-    const CPose2D t = s.truth[i] - s.truth[i - 1];
-    const CPose2D z(t.x() + nxy(rng), t.y() + nxy(rng), t.phi() + 0.6 * kDeg + nth(rng));
-    s.graph.insertEdge(i - 1, i, edge(z, 0.03, 1 * kDeg));
-    p = p + z;
+    s.graph.insertEdge(i - 1, i, edge(laps.odometry[i], 0.03, 1 * kDeg));
+    p = p + laps.odometry[i];
     s.graph.nodes[i] = p;
   }
   // Correct closures: the second lap against the first, every 4th pose.
