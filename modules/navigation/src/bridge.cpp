@@ -480,16 +480,9 @@ RunMetrics runBridge(const BridgeOptions& o) {
                                        static_cast<size_t>((y1 - y0) / res) + 1, 0.5f);
       io::renderGridMapPng(canvas, png, ro);
     }
-    m.outputs.push_back(png);
-    m.outputs.push_back((fs::path(o.out_dir) / "navlog.csv").string());
-    const std::string js = (fs::path(o.out_dir) / "summary.json").string();
-    std::ofstream(js) << m.toJson() << "\n";
-    m.outputs.push_back(js);
+    m.writeSummary(o.out_dir, png);
   }
-  if (error) {
-    for (const auto& f : m.outputs) std::cerr << "[navigate] wrote " << f << "\n";
-    throw *error;
-  }
+  if (error) m.failWith(*error);
   return m;
 }
 

@@ -482,17 +482,23 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     ro.overlays.push_back(tr);
     const std::string png = (fs::path(o.out_dir) / "run.png").string();
     io::renderGridMapPng(world->grid(), png, ro);
-    m.outputs.push_back(png);
-    m.outputs.push_back((fs::path(o.out_dir) / "navlog.csv").string());
-    const std::string js = (fs::path(o.out_dir) / "summary.json").string();
-    std::ofstream(js) << m.toJson() << "\n";
-    m.outputs.push_back(js);
+    m.writeSummary(o.out_dir, png);
   }
-  if (input_error) {
-    for (const auto& f : m.outputs) std::cerr << "[navigate] wrote " << f << "\n";
-    throw *input_error;
-  }
+  if (input_error) m.failWith(*input_error);
   return m;
+}
+
+void RunMetrics::writeSummary(const std::string& out_dir, const std::string& png) {
+  outputs.push_back(png);
+  outputs.push_back((fs::path(out_dir) / "navlog.csv").string());
+  const std::string js = (fs::path(out_dir) / "summary.json").string();
+  std::ofstream(js) << toJson() << "\n";
+  outputs.push_back(js);
+}
+
+void RunMetrics::failWith(const InputError& error) const {
+  for (const auto& f : outputs) std::cerr << "[navigate] wrote " << f << "\n";
+  throw error;
 }
 
 std::string RunMetrics::toJson() const {

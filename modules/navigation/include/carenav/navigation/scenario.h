@@ -2,6 +2,7 @@
 // sec. 6.1): `carenav navigate --scenario S.yaml` and `--suite DIR`.
 #pragma once
 
+#include <carenav/common/errors.h>
 #include <carenav/common/robot.h>
 #include <carenav/navigation/intent.h>
 #include <carenav/navigation/navigation_params.h>
@@ -87,6 +88,11 @@ struct RunMetrics {
   bool entered_forbidden = false;
   std::vector<std::string> outputs;
   std::string toJson() const;
+  /** Lists run.png (`png`, written by the caller) and navlog.csv of
+   *  `out_dir` as outputs, writes summary.json there (listed too). */
+  void writeSummary(const std::string& out_dir, const std::string& png);
+  /** A run that ended on bad input: names what was written, then throws it. */
+  [[noreturn]] void failWith(const InputError& error) const;
 };
 
 struct RunOptions {
