@@ -16,7 +16,7 @@ root=$(cd "$here/../.." && pwd)
 bin="$build/apps/carenav/carenav"
 data=${CARENAV_MRPT_DATASETS:-/usr/share/mrpt/datasets}
 cfg=/usr/share/mrpt/config_files
-shared="$root/../shared/data"
+testdata="$root/tests/data"
 [ -x "$bin" ] || { echo "build first: $bin not found" >&2; exit 2; }
 for t in icp-slam rbpf-slam rawlog-edit; do
   command -v $t >/dev/null || { echo "$t missing: install mrpt-apps" >&2; exit 2; }
@@ -88,7 +88,7 @@ ate() {  # est.tum ref.tum by_index -> "rmse"
 }
 for log in intel csail; do
   byidx=0; [ $log = csail ] && byidx=1
-  "$bin" -q import carmen "$shared/carmen/$log-corrected.log.gz" --out $log.rawlog --odometry none >/dev/null
+  "$bin" -q import carmen "$testdata/carmen/$log-corrected.log.gz" --out $log.rawlog --odometry none >/dev/null
   headless "$cfg/icp-slam/icp-slam_demo_classic.ini" "$work/$log.rawlog" "$work/${log}_mrpt_icp" > ${log}_icp.ini
   m=$(secs icp-slam ${log}_icp.ini)
   c=$(secs "$bin" -q slam --profile ${log}_icp.ini --rawlog $log.rawlog --method icp --out ${log}_c_icp)

@@ -16,7 +16,7 @@
 
 namespace carenav_test {
 namespace fs = std::filesystem;
-inline const std::string kSharedData = CARENAV_SHARED_DATA;
+inline const std::string kTestData = CARENAV_TEST_DATA;
 
 inline const std::string kBin = CARENAV_BIN;
 inline const std::string kSrc = CARENAV_SOURCE_DIR;

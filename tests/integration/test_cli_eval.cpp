@@ -1,5 +1,5 @@
 // `carenav eval` on trajectories the tests write, and on the SLAM-corrected
-// reference of the Intel Research Lab log (../shared/data/carmen).
+// reference of the Intel Research Lab log (tests/data/carmen).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::string kIntel = kSharedData + "/carmen/intel-corrected.log.gz";
+const std::string kIntel = kTestData + "/carmen/intel-corrected.log.gz";
 
 fs::path dirFor(const std::string& name) {
   const fs::path d = scratch() / ("eval_" + name);

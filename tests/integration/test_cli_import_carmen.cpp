@@ -15,8 +15,8 @@ using namespace carenav_test;
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kIntel = kSharedData + "/carmen/intel-corrected.log.gz";
-const std::string kCsail = kSharedData + "/carmen/csail-corrected.log.gz";
+const std::string kIntel = kTestData + "/carmen/intel-corrected.log.gz";
+const std::string kCsail = kTestData + "/carmen/csail-corrected.log.gz";
 
 /** One number per line of a shell command's output. */
 std::vector<double> numbers(const std::string& cmdline) {

@@ -8,7 +8,7 @@ using namespace carenav_test;
 
 namespace {
 const std::string kProfile = kSrc + "/ini/isr-aiwalker.ini";
-const std::string kOffice = kSharedData + "/pcd/office1.pcd";
+const std::string kOffice = kTestData + "/pcd/office1.pcd";
 const std::string kRgbd = kDatasets + "/tests_rgbd.rawlog";
 
 double jsonReal(const std::string& json, const std::string& key) {

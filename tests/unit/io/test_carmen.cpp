@@ -23,7 +23,7 @@ using mrpt::obs::CObservation2DRangeScan;
 using mrpt::obs::CObservationOdometry;
 
 namespace {
-const std::string kShared = CARENAV_SHARED_DATA;
+const std::string kTestData = CARENAV_TEST_DATA;
 const double kDeg = M_PI / 180;
 
 fs::path scratch() {
@@ -530,7 +530,7 @@ std::vector<LaserLine> flaserLines(const std::string& gz) {
 }
 
 void checkRealLog(const std::string& name, size_t expected_scans, size_t beams) {
-  const std::string path = kShared + "/carmen/" + name;
+  const std::string path = kTestData + "/carmen/" + name;
   ASSERT_TRUE(fs::exists(path)) << path;
   const auto lines = flaserLines(path);
   ASSERT_EQ(lines.size(), expected_scans);

@@ -114,7 +114,7 @@ TEST(PerceptionIo, PcdAndPlyRoundTripAllEncodings) {
 }
 
 TEST(PerceptionIo, ReadsTheBinaryCompressedKinectFrame) {
-  const std::string f = std::string(CARENAV_SHARED_DATA) + "/pcd/office1.pcd";
+  const std::string f = std::string(CARENAV_TEST_DATA) + "/pcd/office1.pcd";
   const Cloud c = readPcd(f);
   EXPECT_EQ(c.width, 640u);
   EXPECT_EQ(c.height, 480u);

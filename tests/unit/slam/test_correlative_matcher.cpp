@@ -54,7 +54,7 @@ TEST(CorrelativeMatcher, MatchesConsecutiveScansOfTheIntelLog) {
   // Real scans, 0.6 m and 20 deg apart on average; the reference poses of
   // the (SLAM-corrected) log are the truth. From a no-motion prior the
   // matcher must land on the right pose for nearly all of them.
-  const std::string log = std::string(CARENAV_SHARED_DATA) + "/carmen/intel-corrected.log.gz";
+  const std::string log = std::string(CARENAV_TEST_DATA) + "/carmen/intel-corrected.log.gz";
   ASSERT_TRUE(std::filesystem::exists(log));
   const auto dir =
       std::filesystem::temp_directory_path() / ("carenav_cm_" + std::to_string(::getpid()));
