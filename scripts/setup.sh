@@ -17,6 +17,8 @@ packages=(
   mrpt-common
   # MRPT's own command-line apps (rawlog-edit, icp-slam, pf-localization): test and benchmark baselines
   mrpt-apps
+  # cpack -G DEB: dependencies of the package from the linked libraries
+  dpkg-dev file
   # command line, tests, benchmarks
   libcli11-dev libgtest-dev libbenchmark-dev
 )

@@ -4,6 +4,7 @@
 //                  [--speed F]    (the built-in simulator)
 //               carenav navigate --bridge HOST:PORT --profile P --intent SRC | --goal G --map M
 //                  --start x,y,deg   (a real robot)
+#include <carenav/common/data_dir.h>
 #include <carenav/common/errors.h>
 #include <carenav/common/profile.h>
 #include <carenav/navigation/bridge.h>
@@ -254,9 +255,11 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
                    "The walker's user: csv:FILE (timed t,v,w rows, or a navlog.csv to replay a "
                    "run), keyboard (w/s a/d or arrows, space stop, q quit), joystick[:DEV] "
                    "(default /dev/input/js0), tcp:[HOST:]PORT (lines 'v w')");
-  auto* world = live->add_option("--world", a->world,
-                                 "Simulator world YAML (docs/simulate.md); default "
-                                 "maps/worlds/apartment.yaml of the source tree");
+  auto* world =
+      live->add_option("--world", a->world,
+                       "Simulator world YAML (docs/simulate.md); default "
+                       "maps/worlds/apartment.yaml of carenav's data folder (share/carenav, or "
+                       "$CARENAV_DATA_DIR)");
   live->add_option("--start", a->start,
                    "Start pose x,y,deg (simulator, or on --map with --bridge)");
   live->add_option("--speed", a->speed,
@@ -346,9 +349,11 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
       } else {
         s.name = "live";
         s.file = "navigate";
-        s.world = !a->world.empty() ? a->world : CARENAV_DEFAULT_WORLD;
+        s.world = !a->world.empty()
+                      ? a->world
+                      : dataFile("maps/worlds/apartment.yaml", "the default world (--world)");
         if (!fs::exists(s.world)) throw InputError(s.world + ": no such world file (--world)");
-        s.profile = CARENAV_DEFAULT_PROFILE;
+        s.profile = dataFile("ini/isr-aiwalker.ini", "the default profile (--profile)");
         s.start = parsePose(a->start.empty() ? "1.0,4.0,0" : a->start, "--start");
         s.duration = std::numeric_limits<double>::infinity();
       }

@@ -1,3 +1,4 @@
+#include <carenav/common/data_dir.h>
 #include <carenav/common/profile.h>
 #include <carenav/common/robot.h>
 
@@ -107,6 +108,22 @@ std::string readFileOrThrow(const std::string& path) {
   return ss.str();
 }
 
+/** A profile's `base`: relative to the profile's own folder; a relative name
+ *  not found there is looked for among the shipped profiles (dataDir()/ini),
+ *  so a robot profile copied elsewhere still finds defaults.ini. */
+std::string resolveBase(const std::string& file, const std::string& base) {
+  const fs::path b(base);
+  const fs::path beside = (fs::path(file).parent_path() / b).lexically_normal();
+  std::error_code ec;
+  if (b.is_absolute() || fs::exists(beside, ec)) return beside.string();
+  const std::string data = dataDir();
+  if (!data.empty()) {
+    const fs::path shipped = (fs::path(data) / "ini" / b).lexically_normal();
+    if (fs::exists(shipped, ec)) return shipped.string();
+  }
+  return beside.string();
+}
+
 void setEntry(Profile::Section& sec, const std::string& key, Profile::Entry e) {
   for (auto& [k, v] : sec)
     if (k == key) {
@@ -171,8 +188,7 @@ void Profile::parseInto(Profile& p, const std::string& text, const std::string& 
   if (pit != own.end()) {
     for (const auto& [k, e] : pit->second) {
       if (k != "base" || e.value.empty()) continue;
-      const fs::path base = fs::path(file).parent_path() / e.value;
-      const std::string bs = base.lexically_normal().string();
+      const std::string bs = resolveBase(file, e.value);
       if (std::find(chain.begin(), chain.end(), bs) != chain.end())
         throw InputError(e.origin.where() + ": [profile] base: '" + bs +
                          "' is already being read (circular base chain)");

@@ -1,3 +1,4 @@
+#include <carenav/common/data_dir.h>
 #include <carenav/common/profile.h>
 #include <carenav/common/robot.h>
 
@@ -257,4 +258,36 @@ TEST(Profile, EditDistance) {
   EXPECT_EQ(editDistance("v_max", "v_max"), 0u);
   EXPECT_EQ(editDistance("w_mx", "w_max"), 1u);
   EXPECT_EQ(editDistance("", "abc"), 3u);
+}
+
+// ------------------------------------------------- the shipped data folder
+
+TEST_F(ProfileFiles, ACopiedProfileFindsItsBaseInTheDataFolder) {
+  // dir_ plays the installed data folder (its ini/defaults.ini); the profile
+  // is a copy elsewhere that names `base = defaults.ini`.
+  fs::create_directories(dir_ / "ini");
+  fs::rename(dir_ / "defaults.ini", dir_ / "ini" / "defaults.ini");
+  const fs::path elsewhere = dir_ / "copies";
+  fs::create_directories(elsewhere);
+  std::ofstream(elsewhere / "mine.ini") << kWalkerish;
+  ::setenv("CARENAV_DATA_DIR", dir_.c_str(), 1);
+  EXPECT_EQ(fs::path(dataDir()), dir_);
+  const Profile p = Profile::load((elsewhere / "mine.ini").string());
+  ::unsetenv("CARENAV_DATA_DIR");
+  EXPECT_DOUBLE_EQ(p.section<RobotParams>("robot").w_max, 0.75) << "the base's value";
+  // A base beside the copy wins over the shipped one.
+  std::ofstream(elsewhere / "defaults.ini") << "[profile]\nname = d\n[robot]\nw_max = 0.5\n";
+  ::setenv("CARENAV_DATA_DIR", dir_.c_str(), 1);
+  const Profile q = Profile::load((elsewhere / "mine.ini").string());
+  ::unsetenv("CARENAV_DATA_DIR");
+  EXPECT_DOUBLE_EQ(q.section<RobotParams>("robot").w_max, 0.5);
+}
+
+TEST_F(ProfileFiles, AMissingDataFolderIsNamedWithWhereItWasLookedFor) {
+  ::setenv("CARENAV_DATA_DIR", (dir_ / "nothing-here").c_str(), 1);
+  const std::string msg = errorOf([] { dataFile("ini/isr-aiwalker.ini", "the default profile"); });
+  ::unsetenv("CARENAV_DATA_DIR");
+  EXPECT_NE(msg.find("the default profile"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("nothing-here"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("CARENAV_DATA_DIR"), std::string::npos) << msg;
 }
