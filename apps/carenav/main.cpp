@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 
 #ifndef CARENAV_VERSION
@@ -37,6 +38,25 @@ std::string mrptDatasetsDir() {
 }
 }  // namespace carenav::app
 
+namespace {
+/** "unknown command 'x' ..." when the first word that is not an option names
+ *  no command (CLI11 would only say that a subcommand is required); empty
+ *  otherwise. */
+std::string unknownCommand(const CLI::App& app, int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (!a.empty() && a[0] == '-') continue;
+    std::string names;
+    for (const auto* c : app.get_subcommands({})) {
+      if (c->get_name() == a) return {};
+      names += (names.empty() ? "" : ", ") + c->get_name();
+    }
+    return "unknown command '" + a + "' (commands: " + names + "; carenav --help)";
+  }
+  return {};
+}
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace carenav;
   installCrashGuard();
@@ -59,6 +79,10 @@ int main(int argc, char** argv) {
   std::stable_sort(cmds.begin(), cmds.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   for (const auto& [order, add] : cmds) add(app, g);
+  if (const std::string unknown = unknownCommand(app, argc, argv); !unknown.empty()) {
+    std::fprintf(stderr, "carenav: error: %s\n", unknown.c_str());
+    return kExitInput;
+  }
 
   try {
     app.parse(argc, argv);
@@ -73,6 +97,11 @@ int main(int argc, char** argv) {
     return kExitInput;
   } catch (const InputError& e) {
     std::fprintf(stderr, "carenav: error: %s\n", e.what());
+    return kExitInput;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // Paths come from the user (--out folders, files to write): their input.
+    std::fprintf(stderr, "carenav: error: %s: %s (%s)\n", e.path1().c_str(),
+                 e.code().message().c_str(), e.what());
     return kExitInput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "carenav: failure: %s\n", e.what());

@@ -108,6 +108,10 @@ std::string readFileOrThrow(const std::string& path) {
   return ss.str();
 }
 
+/** Longest chain of `base` profiles read (the shipped ones use 2); longer is
+ *  refused before the recursion can exhaust the stack. */
+constexpr size_t kMaxBaseChain = 16;
+
 /** A profile's `base`: relative to the profile's own folder; a relative name
  *  not found there is looked for among the shipped profiles (dataDir()/ini),
  *  so a robot profile copied elsewhere still finds defaults.ini. */
@@ -192,6 +196,9 @@ void Profile::parseInto(Profile& p, const std::string& text, const std::string& 
       if (std::find(chain.begin(), chain.end(), bs) != chain.end())
         throw InputError(e.origin.where() + ": [profile] base: '" + bs +
                          "' is already being read (circular base chain)");
+      if (chain.size() >= kMaxBaseChain)
+        throw InputError(e.origin.where() + ": [profile] base: more than " +
+                         std::to_string(kMaxBaseChain) + " profiles in the base chain");
       chain.push_back(bs);
       std::string btext;
       try {

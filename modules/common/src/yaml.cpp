@@ -100,7 +100,19 @@ class Parser {
     return true;
   }
 
+  /** Nesting depth of the value being parsed; deeper than kMaxDepth is refused
+   *  before the recursion can exhaust the stack. */
+  struct Nest {
+    Nest(Parser& p, int line) : p_(p) {
+      if (++p_.depth_ > kMaxDepth)
+        p_.fail(line, "nested deeper than " + std::to_string(kMaxDepth) + " levels");
+    }
+    ~Nest() { --p_.depth_; }
+    Parser& p_;
+  };
+
   Node block(int indent) {
+    const Nest nest(*this, lines_[i_].number);
     const Line& first = lines_[i_];
     if (isSeqItem(first.text)) return sequence(indent);
     std::string key, rest;
@@ -182,6 +194,7 @@ class Parser {
   }
 
   Node flowValue(const std::string& t, size_t& k, int line) {
+    const Nest nest(*this, line);
     while (k < t.size() && t[k] == ' ') ++k;
     Node n;
     n.line = line;
@@ -236,6 +249,7 @@ class Parser {
   std::vector<Line> lines_;
   size_t i_ = 0;
   int last_line_ = 0;
+  int depth_ = 0;
 };
 
 }  // namespace

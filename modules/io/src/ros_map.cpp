@@ -214,6 +214,27 @@ std::string readWholeFile(const std::string& path, const char* what) {
   return ss.str();
 }
 
+/** Refuses an image larger than kMaxImageSide per side or kMaxImagePixels in
+ *  all before anything is allocated for it. */
+void checkImageSize(const std::string& path, uint64_t w, uint64_t h) {
+  if (w > kMaxImageSide || h > kMaxImageSide || w * h > kMaxImagePixels)
+    throw InputError(path + ": image size " + std::to_string(w) + " x " + std::to_string(h) +
+                     " is too large (at most " + std::to_string(kMaxImageSide) + " per side and " +
+                     std::to_string(kMaxImagePixels) + " pixels)");
+}
+
+/** A PNG's declared size, from its IHDR chunk (bytes 16-23, big-endian). */
+void checkPngSize(const std::string& path, const std::string& data) {
+  if (data.size() < 24 || data.compare(12, 4, "IHDR") != 0)
+    throw InputError(path + ": PNG without its IHDR header chunk (corrupt or truncated)");
+  auto be32 = [&](size_t at) {
+    uint64_t v = 0;
+    for (size_t k = 0; k < 4; ++k) v = (v << 8) | static_cast<unsigned char>(data[at + k]);
+    return v;
+  };
+  checkImageSize(path, be32(16), be32(20));
+}
+
 // A PNM header: magic, width, height, maxval with blanks and comments between.
 class PnmParser {
  public:
@@ -229,8 +250,7 @@ class PnmParser {
     const uint64_t maxval = headerNumber("maxval");
     if (w == 0 || h == 0)
       fail("image size " + std::to_string(w) + " x " + std::to_string(h) + " is empty");
-    if (w > 200000 || h > 200000 || w * h > (uint64_t{1} << 31))
-      fail("image size " + std::to_string(w) + " x " + std::to_string(h) + " is too large");
+    checkImageSize(path_, w, h);
     if (maxval == 0) fail("maxval 0 is invalid");
     if (maxval > 255)
       fail("maxval " + std::to_string(maxval) + " > 255: 16-bit images are not supported");
@@ -243,16 +263,18 @@ class PnmParser {
     img.height = h;
     img.channels = channels;
     const uint64_t n = w * h * channels;
+    // The pixels must be in the file before any room is made for them: n bytes
+    // (binary), at least 2 n (ascii: a digit and a blank each).
+    const uint64_t avail = d_.size() - pos_;
+    if (avail < (ascii ? 2 * n - 1 : n))
+      fail("truncated pixel data: " + std::to_string(avail) + " bytes for " + std::to_string(w) +
+           " x " + std::to_string(h) + (channels == 3 ? " x 3" : "") + " = " + std::to_string(n) +
+           " values");
     img.sums.resize(w * h);
     auto scale = [&](uint64_t v) -> uint16_t {
       return static_cast<uint16_t>(maxval == 255 ? v : (v * 255 + maxval / 2) / maxval);
     };
     if (!ascii) {
-      const uint64_t avail = d_.size() - pos_;
-      if (avail < n)
-        fail("truncated pixel data: " + std::to_string(avail) + " bytes, expected " +
-             std::to_string(w) + " x " + std::to_string(h) + (channels == 3 ? " x 3" : "") + " = " +
-             std::to_string(n));
       const auto* p = reinterpret_cast<const unsigned char*>(d_.data() + pos_);
       for (uint64_t i = 0; i < w * h; ++i) {
         uint16_t s = 0;
@@ -485,6 +507,7 @@ GreyImage readImageGrey(const std::string& path) {
   // on stderr): its last chunk, IEND, is missing.
   if (png && data.find("IEND", data.size() > 64 ? data.size() - 64 : 0) == std::string::npos)
     throw InputError(path + ": truncated PNG (no IEND chunk at the end); cannot decode the image");
+  if (png) checkPngSize(path, data);
   return decodeWithOpenCv(path);
 }
 

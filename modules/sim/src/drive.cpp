@@ -97,6 +97,10 @@ CommandScript readCommandScript(const std::string& path) {
       throw InputError(path + ":" + std::to_string(line) + ": time " + std::to_string(x[0]) +
                        " goes back (previous row " + std::to_string(s.rows.back().t) + ")");
     if (x[0] < 0) throw InputError(path + ":" + std::to_string(line) + ": negative time");
+    if (x[0] > kMaxSimSeconds)
+      throw InputError(path + ":" + std::to_string(line) + ": time " + std::to_string(x[0]) +
+                       " s is beyond the longest simulation (" +
+                       std::to_string(static_cast<int>(kMaxSimSeconds)) + " s)");
     s.rows.push_back({x[0], x[1], x[2]});
   });
   if (n == 0) throw InputError(path + ": no command rows (expected lines \"t v w\")");

@@ -41,6 +41,11 @@ SimulateResult runSimulate(const SimulateOptions& o) {
   if (!dir.empty() && !fs::is_directory(dir, ec))
     throw InputError("--out " + out + ": folder " + dir.string() + " does not exist");
   if (o.path.empty() && !o.script) throw InputError("give --path or --script");
+  if (o.path.size() == 1 && !o.start)
+    throw InputError("--path: one waypoint and no --start: the robot starts on it, nothing to drive");
+  if (o.duration > kMaxSimSeconds)
+    throw InputError("--duration " + std::to_string(o.duration) + " s: at most " +
+                     std::to_string(static_cast<int>(kMaxSimSeconds)) + " s");
   bool any_sensor = false;
   for (const auto& s : o.sensors) any_sensor = any_sensor || s.type != "bumper";
   if (!any_sensor)

@@ -92,8 +92,18 @@ World::World(mrpt::maps::COccupancyGridMap2D grid, std::vector<Feature> features
   computeClearance();
 }
 
-int World::cellX(double x) const { return static_cast<int>(std::floor((x - x0_) / res_)); }
-int World::cellY(double y) const { return static_cast<int>(std::floor((y - y0_) / res_)); }
+namespace {
+/** floor(d) as a cell index, clamped to [-1, n] (outside the grid either
+ *  way) so that a far-away or non-finite coordinate never overflows an int. */
+int cellIndex(double d, int n) {
+  const double c = std::floor(d);
+  if (!(c >= -1)) return -1;
+  return c > n ? n : static_cast<int>(c);
+}
+}  // namespace
+
+int World::cellX(double x) const { return cellIndex((x - x0_) / res_, nx_); }
+int World::cellY(double y) const { return cellIndex((y - y0_) / res_, ny_); }
 
 double World::floorAt(double x, double y) const {
   const int cx = cellX(x), cy = cellY(y);
@@ -237,10 +247,14 @@ struct Reader {
   Vec2 point(const Node& n, const std::string& what) const {
     if (n.kind != Node::Kind::Seq || n.seq.size() != 2)
       fail(n.line, what + ": expected a point [x, y]");
-    return {number(n.seq[0], what), number(n.seq[1], what)};
+    return {number(n.seq[0], what, -kMaxCoordinate, kMaxCoordinate),
+            number(n.seq[1], what, -kMaxCoordinate, kMaxCoordinate)};
   }
   std::vector<Vec2> points(const Node& n, const std::string& what, size_t min_count) const {
     if (n.kind != Node::Kind::Seq) fail(n.line, what + ": expected a list of points [[x, y], ...]");
+    if (n.seq.size() > kMaxPoints)
+      fail(n.line, what + ": " + std::to_string(n.seq.size()) + " points, at most " +
+                       std::to_string(kMaxPoints));
     std::vector<Vec2> out;
     for (const auto& p : n.seq) out.push_back(point(p, what));
     if (out.size() < min_count)
@@ -304,10 +318,10 @@ struct Reader {
     if (rect) {
       if (rect->kind != Node::Kind::Seq || rect->seq.size() != 4)
         fail(rect->line, where + ".rect: expected [x0, y0, x1, y1]");
-      const double x0 = number(rect->seq[0], where + ".rect"),
-                   y0 = number(rect->seq[1], where + ".rect");
-      const double x1 = number(rect->seq[2], where + ".rect"),
-                   y1 = number(rect->seq[3], where + ".rect");
+      double c[4];
+      for (int k = 0; k < 4; ++k)
+        c[k] = number(rect->seq[k], where + ".rect", -kMaxCoordinate, kMaxCoordinate);
+      const double x0 = c[0], y0 = c[1], x1 = c[2], y1 = c[3];
       if (!(x1 > x0 && y1 > y0)) fail(rect->line, where + ".rect: needs x1 > x0 and y1 > y0");
       f.polygon = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
     } else {
@@ -415,11 +429,17 @@ World worldFromText(const std::string& text, const std::string& origin, const st
   if (const Node* fs_ = r.opt(root, "features")) {
     if (fs_->kind != Node::Kind::Seq)
       r.fail(fs_->line, "features: expected a list ('- type: ...')");
+    if (fs_->seq.size() > kMaxFeatures)
+      r.fail(fs_->line, "features: " + std::to_string(fs_->seq.size()) + " features, at most " +
+                            std::to_string(kMaxFeatures));
     for (size_t i = 0; i < fs_->seq.size(); ++i) features.push_back(r.feature(fs_->seq[i], i));
   }
   std::vector<Person> people;
   if (const Node* ps = r.opt(root, "people")) {
     if (ps->kind != Node::Kind::Seq) r.fail(ps->line, "people: expected a list ('- path: ...')");
+    if (ps->seq.size() > kMaxPeople)
+      r.fail(ps->line, "people: " + std::to_string(ps->seq.size()) + " people, at most " +
+                           std::to_string(kMaxPeople));
     for (size_t i = 0; i < ps->seq.size(); ++i) people.push_back(r.person(ps->seq[i], i));
   }
   World w(std::move(grid), std::move(features), std::move(people), wall_height);

@@ -364,7 +364,15 @@ TEST(MapIo, MalformedRosMapsAreInputErrorsNamingFileAndProblem) {
   imageCase("badsize.pgm", "P5\n2 x\n255\n", {"bad height"});
   imageCase("zerosize.pgm", "P5\n0 2\n255\n", {"empty"});
   imageCase("huge.pgm", "P5\n900000 900000\n255\n", {"too large"});
-  imageCase("ascii_short.pgm", "P2\n2 2\n255\n0 1 2\n", {"truncated pixel data", "3 of 4"});
+  imageCase("ascii_short.pgm", "P2\n2 2\n255\n0 1 2\n", {"truncated pixel data", "2 x 2 = 4"});
+  imageCase("ascii_gap.pgm", "P2\n2 2\n255\n0 1     2\n", {"truncated pixel data", "3 of 4"});
+  // Declared sizes are checked against the bytes there before any allocation.
+  imageCase("big_small.pgm", "P5\n10000 10000\n255\n" + std::string(10, '\0'),
+            {"truncated pixel data", "10 bytes", "10000 x 10000"});
+  imageCase("big_ascii.pgm", "P2\n10000 10000\n255\n0 0 0\n", {"truncated pixel data"});
+  imageCase("over.pgm", "P5\n20000 20000\n255\n", {"too large", "134217728 pixels"});
+  std::string ihdr("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\x02\0\0\0\x02\0\0", 24);
+  imageCase("huge.png", ihdr + std::string(40, '\0') + "IEND", {"image size 131072 x 131072"});
   imageCase("ascii_over.pgm", "P2\n2 2\n15\n0 1 2 99\n", {"pixel value 99 > maxval 15"});
   imageCase("fake.png", "not a png at all", {"not a PNG"});
   mrpt::img::CImage noise(64, 64, mrpt::img::CH_GRAY);

@@ -157,3 +157,22 @@ TEST(SimJob, BadStartsAndOutputsAreInputErrors) {
   o.out = (scratch() / "no_such_dir" / "x.rawlog").string();
   EXPECT_THROW(runSimulate(o), InputError);
 }
+
+TEST(SimJob, ScriptTimesDurationAndOnePointPathsAreBounded) {
+  const auto d = scratch();
+  std::ofstream(d / "far.txt") << "0 0.2 0\n1e15 0 0\n";
+  try {
+    readCommandScript((d / "far.txt").string());
+    ADD_FAILURE() << "a row at t = 1e15 was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("far.txt:2: time"), std::string::npos) << e.what();
+  }
+  auto o = walker();
+  o.out = (d / "bounded.rawlog").string();
+  o.duration = 1e12;
+  EXPECT_THROW(runSimulate(o), InputError);
+  o.duration = 0;
+  o.path = {{1, 4}};
+  EXPECT_THROW(runSimulate(o), InputError) << "one waypoint, no start: nothing to drive";
+  EXPECT_FALSE(fs::exists(d / "bounded.rawlog.tmp"));
+}

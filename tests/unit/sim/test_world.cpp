@@ -179,3 +179,35 @@ TEST(SimWorld, TabsAndBadIndentationAreErrors) {
   const auto g = writeWorld("indent.yaml", kMapLines + "  stray: 1\n");
   EXPECT_NE(errorOf(g).find(":3:"), std::string::npos) << errorOf(g);
 }
+
+// ------------------------------------------- bounded by construction
+
+TEST(SimWorld, HugeCoordinatesAndCountsAreRefusedBeforeRasterising) {
+  const std::string far = writeWorld(
+      "far.yaml", kMapLines + "features:\n  - type: step\n    rect: [0, 0, 1e9, 1e9]\n"
+                              "    height: 0.1\n");
+  EXPECT_NE(errorOf(far).find("far.yaml:5: features[0].rect: 1e9 is out of range"),
+            std::string::npos)
+      << errorOf(far);
+  std::string poly = "[";
+  for (int i = 0; i < 100000; ++i)
+    poly += (i ? ", [" : "[") + std::to_string(i % 7) + ", " + std::to_string(i % 5) + "]";
+  const std::string many = writeWorld(
+      "many.yaml", kMapLines + "features:\n  - type: hole\n    polygon: " + poly +
+                       "]\n    depth: 0.1\n");
+  EXPECT_NE(errorOf(many).find("100000 points, at most"), std::string::npos) << errorOf(many);
+  std::string feats = kMapLines + "features:\n";
+  for (int i = 0; i < 1001; ++i) feats += "  - type: step\n    rect: [1, 1, 2, 2]\n    height: 0.01\n";
+  const std::string lots = writeWorld("lots.yaml", feats);
+  EXPECT_NE(errorOf(lots).find("1001 features, at most"), std::string::npos) << errorOf(lots);
+}
+
+TEST(SimWorld, FarAwayQueriesAreOutsideTheGridNotOverflow) {
+  const World w = loadWorld(kWorlds + "/apartment.yaml");
+  for (double x : {-1e300, -1e12, 1e12, 1e300, std::nan("")}) {
+    EXPECT_EQ(w.floorAt(x, 4.0), 0.0) << x;
+    EXPECT_EQ(w.floorAt(4.0, x), 0.0) << x;
+    EXPECT_LT(w.cellX(x), w.sizeX() + 1);
+    EXPECT_GE(w.cellX(x), -1);
+  }
+}

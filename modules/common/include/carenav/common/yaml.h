@@ -25,6 +25,10 @@ struct Node {
   const Node* find(const std::string& key) const;
 };
 
+/** Deepest nesting of maps, lists and flow lists accepted (world and
+ *  scenario files use 4); deeper input is refused, never a stack overflow. */
+inline constexpr int kMaxDepth = 64;
+
 /** Parses `text`; errors are InputError "origin:line: what". */
 Node parse(const std::string& text, const std::string& origin);
 

@@ -119,6 +119,12 @@ RosMapYaml readRosMapYaml(const std::string& yaml_path);
  *  readImageGrey). */
 COccupancyGridMap2D readRosMap(const std::string& yaml_path);
 
+/** Largest map image read: 65536 pixels per side and 2^27 pixels in all
+ *  (e.g. 11585 x 11585: 579 m square at 5 cm), checked from the header
+ *  before anything is allocated. */
+inline constexpr uint64_t kMaxImageSide = 65536;
+inline constexpr uint64_t kMaxImagePixels = uint64_t{1} << 27;
+
 /** An 8-bit image reduced to one value per pixel, row 0 at the top. The
  *  channel sum is kept because map_server averages channels in floating
  *  point: a colour pixel's mean need not be a whole number. */
@@ -133,7 +139,8 @@ struct GreyImage {
  *  are rescaled to 0..255), or any image OpenCV decodes (PNG...). Colour
  *  pixels become the mean of their channels, as map_server does. Throws
  *  InputError naming the file: missing, empty, bad magic, bad header,
- *  maxval > 255, truncated pixel data, undecodable. */
+ *  maxval > 255, truncated pixel data, larger than kMaxImagePixels,
+ *  undecodable. */
 GreyImage readImageGrey(const std::string& path);
 
 /** How image pixels become cells (the part of a ROS YAML about values). */

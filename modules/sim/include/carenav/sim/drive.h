@@ -37,6 +37,10 @@ class WaypointFollower {
 
 /** Timed commands: rows "t v w" (s, m/s, rad/s), each held until the next
  *  row's time; t must not decrease. */
+/** Latest time a command script or a simulation may reach: one day of
+ *  simulated driving (a rawlog of a day is already gigabytes). */
+inline constexpr double kMaxSimSeconds = 86400;
+
 struct CommandScript {
   struct Row {
     double t, v, w;

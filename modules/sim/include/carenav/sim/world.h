@@ -15,6 +15,14 @@
 
 namespace carenav::sim {
 
+/** Limits of a world file, checked while reading it (docs/simulate.md):
+ *  coordinates within +-kMaxCoordinate m, at most kMaxPoints points in a
+ *  polygon or path, kMaxFeatures features and kMaxPeople people. */
+inline constexpr double kMaxCoordinate = 1e5;
+inline constexpr size_t kMaxPoints = 1000;
+inline constexpr size_t kMaxFeatures = 1000;
+inline constexpr size_t kMaxPeople = 100;
+
 struct Vec2 {
   double x = 0, y = 0;
 };
