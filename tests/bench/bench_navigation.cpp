@@ -1,5 +1,5 @@
 // Time of one control cycle of each local planner, with the walker's
-// settings of seed 000 Table 5.1 (7 s horizon at 0.1 s steps, 12 + 12 speed
+// settings of [Rosa17, Table 5.1] (7 s horizon at 0.1 s steps, 12 + 12 speed
 // samples): a 3 m corridor with a box ahead, the walker moving at 0.3 m/s.
 // Also the local cost map rebuild (distance transform) and the safety
 // supervisor, which run every cycle as well.

@@ -158,7 +158,7 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
   // Narrow passages (doorways): runs of path cells closer than
   // passage_clearance to anything not free. Each is crossed straight: a
   // waypoint before it, its throat (the narrowest cell of the run) and one
-  // after it, along the axis across the passage (seed 002: intermediate
+  // after it, along the axis across the passage ([Conceicao16]: intermediate
   // goals at doorways, reached with in-place turns).
   struct Passage {
     size_t centre;

@@ -1,5 +1,5 @@
 // goal-dwa: dynamic window towards the next waypoint of the global route
-// (Interbot and HOBBIT, seeds 002 ch. 3 and 004).
+// (Interbot and HOBBIT: [Conceicao16, Ch. 3]; [Puente14, App. Sec. IV-B]).
 #include <carenav/navigation/local_planner.h>
 
 #include <algorithm>

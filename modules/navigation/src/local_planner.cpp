@@ -149,7 +149,7 @@ std::vector<Twist> sampleWindow(const Window& win, const NavigationParams& p,
 
 PlannerRegistry::PlannerRegistry() {
   add("user-intent-dwa",
-      "walker shared control (seed 000 Alg. 4, Eq. 4.10): the user's (v, w) unless unsafe",
+      "walker shared control ([Rosa17, Alg. 4, Eq. 4.10]): the user's (v, w) unless unsafe",
       makeUserIntentDwa);
   add("goal-dwa", "dynamic window towards the next waypoint of the global route", makeGoalDwa);
   add("mrpt-ptg", mrptPtgDescription(),

@@ -1,5 +1,5 @@
 // Moving-obstacle tracks: nearest-neighbour association of clusters with a
-// constant-velocity prediction (the people model of seed 002 sec. 6.1's
+// constant-velocity prediction (the people model of [Conceicao16, Sec. 6.1]'s
 // person-crossing and person-towards tests: a person walks straight at a
 // steady pace).
 #include <carenav/navigation/moving_tracker.h>

@@ -12,12 +12,12 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
                   "local method: user-intent-dwa (walker shared control), goal-dwa or mrpt-ptg "
                   "(MRPT's TP-space navigation, [nav.mrpt_ptg])")
           .real("sim_time", &P::sim_time, "s", 0.1, 30,
-                "horizon of each sampled trajectory (seed 000 Table 5.1: 7.0)")
-          .real("sim_step", &P::sim_step, "s", 0.01, 1, "rollout step (seed 000: 0.1)")
+                "horizon of each sampled trajectory ([Rosa17, Table 5.1]: 7.0)")
+          .real("sim_step", &P::sim_step, "s", 0.01, 1, "rollout step ([Rosa17]: 0.1)")
           .real("window_time", &P::window_time, "s", 0.01, 5,
-                "dynamic window: velocities reachable in this time (seed 000 time constant 0.5)")
+                "dynamic window: velocities reachable in this time ([Rosa17] time constant 0.5)")
           .integer("v_samples", &P::v_samples, "", 2, 100,
-                   "samples of v per direction (seed 000: 12 forward, 12 backward)")
+                   "samples of v per direction ([Rosa17]: 12 forward, 12 backward)")
           .integer("w_samples", &P::w_samples, "", 2, 100, "samples of w across the window")
           .real("k_s", &P::k_s, "", 0, 100, "user-intent DWA: weight of the summed cell cost")
           .real("k_0", &P::k_0, "m", 0, 100,
@@ -48,7 +48,7 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
           .real("local_size", &P::local_size, "m", 1, 50, "side of the robot-centred local grid")
           .real("resolution", &P::resolution, "m", 0.01, 0.5, "cell size of the local grid")
           .real("obstacle_persistence", &P::obstacle_persistence, "s", 0, 600,
-                "seen obstacles are remembered this long (seed 004: about 5)")
+                "seen obstacles are remembered this long ([Puente14, App. Table I]: 5)")
           .real("memory_radius", &P::memory_radius, "m", 0.5, 50,
                 "remembered obstacles farther from the robot are dropped")
           .real("predict_speed", &P::predict_speed, "m/s", 0, 3,
@@ -91,9 +91,9 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
           .real("passage_approach", &P::passage_approach, "m", 0.1, 5,
                 "global route: waypoints this far before and after a passage, on its axis")
           .real("goal_tolerance", &P::goal_tolerance, "m", 0.01, 10,
-                "goal reached within this distance (seed 002: 0.5)")
+                "goal reached within this distance ([Conceicao16]: 0.5)")
           .real("goal_tolerance_deg", &P::goal_tolerance_deg, "deg", 0.1, 180,
-                "heading tolerance at the goal (seed 002: 0.05 rad)")
+                "heading tolerance at the goal ([Conceicao16]: 0.05 rad)")
           .real("sensor_timeout", &P::sensor_timeout, "s", 0.01, 10,
                 "safety: stop when the newest scan is older")
           .real("odom_timeout", &P::odom_timeout, "s", 0.01, 10,

@@ -1,4 +1,4 @@
-// user-intent-dwa: seed 000's shared control for the ISR-AIWALKER walker.
+// user-intent-dwa: [Rosa17]'s shared control for the ISR-AIWALKER walker.
 #include <carenav/navigation/local_planner.h>
 
 #include <algorithm>

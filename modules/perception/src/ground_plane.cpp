@@ -167,7 +167,8 @@ class NodeIndex {
 };
 
 bool similar(const Eigen::Vector3d& n1, const Eigen::Vector3d& n2, double n_th) {
-  // SPEC.md decision: "similar normals" is 1 - |n1 . n2| <= N_th.
+  // carenav's normal test (docs/design.md, 'Ground plane'): "similar normals" is 1 - |n1 . n2| <=
+  // N_th.
   return 1.0 - std::abs(n1.dot(n2)) <= n_th;
 }
 
@@ -269,7 +270,7 @@ GroundPlaneResult detectGroundRrt(const ElevationGrid& g, const PerceptionParams
   // the robot stands on (|z| <= seed_max_elevation: the robot pose is the
   // initial guess) whose s x s neighbourhood gives a valid, upright plane.
   // When a seed's tree stays smaller than min_tree_nodes (a seed on a small
-  // flat object cannot expand, 001 sec. III-B), the next valid seed at least
+  // flat object cannot expand, [Garrote17, Sec. III-B]), the next valid seed at least
   // d_n away is tried, up to seed_attempts; the largest tree wins.
   std::vector<Seed> seeds;
   const int c0 = m / 2;

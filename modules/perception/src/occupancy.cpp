@@ -70,7 +70,7 @@ void LocalOccupancy::endFrame() {
   for (size_t k = 0; k < logodds_.size(); ++k) {
     const float p = occ_[k] > 0.5f ? occ_[k] : free_[k];
     if (p == 0.5f) continue;  // no information
-    // 001 Eq. (3) with p(c) = 0.5: l_t = logit(p(c|z_t)) + l_{t-1}.
+    // [Garrote17, Eq. 3] with p(c) = 0.5: l_t = logit(p(c|z_t)) + l_{t-1}.
     const float l = logodds_[k] + logit(std::clamp(p, kPMin, kPMax));
     logodds_[k] = std::clamp(l, -lm, lm);
   }
@@ -109,9 +109,10 @@ mrpt::maps::COccupancyGridMap2D LocalOccupancy::toMrpt() const {
 }
 
 double voxelDensity(const ElevationCell& c, double cell_area, const PerceptionParams& p) {
-  const double h = std::max(1e-3, static_cast<double>(c.z_hi - c.z_lo));  // SPEC: h >= 1 mm
+  const double h = std::max(
+      1e-3, static_cast<double>(c.z_hi - c.z_lo));  // h >= 1 mm (docs/design.md, 'Floored height')
   const double V = h * cell_area;
-  // 001 Eq. (4): rho = K_m / (1 + exp(-K_n (N_z - d_min) / V)).
+  // [Garrote17, Eq. 4]: rho = K_m / (1 + exp(-K_n (N_z - d_min) / V)).
   const double e = -p.k_n * (static_cast<double>(c.n) - p.d_min) / V;
   if (e > 700) return 0.0;
   return p.k_m / (1.0 + std::exp(e));
@@ -154,9 +155,9 @@ IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const Percep
       const double e = sv / std::sqrt(static_cast<double>(c.n));
       thr[k] = static_cast<float>(t);
       se[k] = static_cast<float>(e);
-      // Rule 1 (001): max distance of z+ and z- to the plane.
+      // Rule 1 ([Garrote17]): max distance of z+ and z- to the plane.
       bool obstacle = voxelPlaneDistance(c, x, y, plane) > t;
-      // Rule 2: the mean of a voxel with enough samples (d_min, 001 Eq. 4).
+      // Rule 2: the mean of a voxel with enough samples (d_min, [Garrote17, Eq. 4]).
       if (!obstacle && p.mean_step > 0 && c.n >= std::max(1.0, p.d_min))
         obstacle = plane.distance(x, y, c.mean) > p.mean_step + p.noise_k * e;
       classes[k] = obstacle ? VoxelClass::Obstacle : VoxelClass::Ground;
@@ -247,7 +248,7 @@ IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const Percep
         const size_t b = static_cast<size_t>(bi) * m + bj;
         if (classes[b] != VoxelClass::Obstacle) continue;
         const ElevationCell& c = g.at(bi, bj);
-        // Too few samples to judge a slope (001 Eq. 4's d_min): the sparse
+        // Too few samples to judge a slope ([Garrote17, Eq. 4]'s d_min): the sparse
         // cells of the noise streak behind a depth edge must not bridge it.
         if (c.n <= min_n) continue;
         // No step inside: z+ and z- within the rule-1 band around the cell's
@@ -302,7 +303,7 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
   const double ca = std::cos(grid.robot().phi()), sa = std::sin(grid.robot().phi());
   const double rx = grid.robot().x(), ry = grid.robot().y();
   // Look-up tables over |D| (1 mm steps) for the Gaussian exp(-D^2 / 2 sigma^2)
-  // and the ground sigmoid 1 / (1 + exp(-D)) of 001 Eqs. (5)-(6).
+  // and the ground sigmoid 1 / (1 + exp(-D)) of [Garrote17, Eqs. 5-6].
   constexpr double kStep = 1e-3;
   const size_t n_lut = static_cast<size_t>(grid.cells() * grid.resolution() * 1.5 / kStep) + 2;
   thread_local std::vector<float> gauss, sigm;
@@ -354,13 +355,14 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
     const double wx = rx + ca * x - sa * y, wy = ry + sa * x + ca * y;
     const double cv = std::hypot(x, y);
     const int vi = grid.cellX(wx), vj = grid.cellY(wy);
-    // |c| in [0, |c_v|], 001 Eq. (5), from the voxel back to the robot.
+    // |c| in [0, |c_v|], [Garrote17, Eq. 5], from the voxel back to the robot.
     int sat = 0;
     grid.walkSegment(wx, wy, cv, 0.0, [&](int ci, int cj, double dc) {
       const bool at_voxel = ci == vi && cj == vj;
       const double D = at_voxel ? 0.0 : std::min(0.0, dc - cv);
-      // (The thesis, 000 ch. 3, writes the ground branch with the Gaussian
-      // exp(-D^2 / 2 sigma^2) inside the sigmoid; SPEC.md: the paper's form.)
+      // (The thesis, [Rosa17, Ch. 3], writes the ground branch with the Gaussian
+      // exp(-D^2 / 2 sigma^2) inside the sigmoid; carenav uses the paper's form: docs/design.md,
+      // 'Inverse sensor model'.)
       const float pr = obstacle ? amp * lut(gauss, D) : kg + (0.5f - kg) * lut(sigm, D);
       if (pr < 0.5f && grid.frameFree(ci, cj) <= pr) {
         if (++sat >= kSaturated) return false;
@@ -370,7 +372,7 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
       grid.addEvidence(ci, cj, pr);
       return true;
     });
-    // |c| in ]|c_v|, max], 001 Eq. (6): ground voxels say nothing beyond;
+    // |c| in ]|c_v|, max], [Garrote17, Eq. 6]: ground voxels say nothing beyond;
     // obstacles keep p > 0.5 while rho exp(-D^2/2s^2) > 0.5.
     if (!obstacle || 2 * rho <= 1) continue;
     const double beyond = std::sqrt(two_s2 * std::log(2 * rho));

@@ -36,24 +36,25 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
       ParamTable<P>()
           .text("sensor", &P::sensor,
                 "sensorLabel of the 3D observations to use (empty: every 3D observation)")
-          .integer("grid_cells", &P::grid_cells, "", 10, 2000,
-                   "m_x = m_y: cells per side of the robot-centred local grids (001 Table I)")
-          .real("resolution", &P::resolution, "m", 0.01, 1, "d_r: cell size (001 Table I)")
+          .integer(
+              "grid_cells", &P::grid_cells, "", 10, 2000,
+              "m_x = m_y: cells per side of the robot-centred local grids ([Garrote17, Table I])")
+          .real("resolution", &P::resolution, "m", 0.01, 1, "d_r: cell size ([Garrote17, Table I])")
           .real("outlier_sigma", &P::outlier_sigma, "", 0, 10,
                 "per-cell outlier removal: drop elevations farther than this many standard "
                 "deviations from the cell mean (0: off)")
           .real("z_min", &P::z_min, "m", -100, 100, "points below (robot frame) are ignored")
           .real("z_max", &P::z_max, "m", -100, 100, "points above (robot frame) are ignored")
           .integer("rrt_iterations", &P::rrt_iterations, "", 1, 100000,
-                   "K: RRT-GPD iterations (001 Table I)")
+                   "K: RRT-GPD iterations ([Garrote17, Table I])")
           .real("normal_threshold", &P::normal_threshold, "", 0, 1,
-                "N_th: similar normals when 1 - |n1.n2| <= N_th (001 Table I)")
+                "N_th: similar normals when 1 - |n1.n2| <= N_th ([Garrote17, Table I])")
           .real("elevation_threshold", &P::elevation_threshold, "m", 0, 10,
-                "E_th: largest elevation step between connected nodes (001 Table I)")
+                "E_th: largest elevation step between connected nodes ([Garrote17, Table I])")
           .integer("window", &P::window, "cells", 3, 31,
-                   "s_x = s_y: neighbourhood of plane fits and IDW (001 Table I)")
+                   "s_x = s_y: neighbourhood of plane fits and IDW ([Garrote17, Table I])")
           .real("expansion_distance", &P::expansion_distance, "m", 0.01, 10,
-                "d_n: RRT node expansion distance (001 Table I)")
+                "d_n: RRT node expansion distance ([Garrote17, Table I])")
           .flag("seed_upright", &P::seed_upright,
                 "the RRT seed plane must also pass the normal test against the robot's up axis")
           .integer("seed_attempts", &P::seed_attempts, "", 1, 1000,
@@ -63,25 +64,27 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
                    "RRT-GPD: a tree with this many nodes is accepted")
           .real("seed_max_elevation", &P::seed_max_elevation, "m", 0, 100,
                 "the RRT seed must lie within this height of the floor the robot stands on "
-                "(robot frame z = 0): the robot pose is the seed's initial guess (001 Alg. 1)")
+                "(robot frame z = 0): the robot pose is the initial guess of [Garrote17, Alg. 1]")
           .integer("ransac_iterations", &P::ransac_iterations, "", 1, 100000,
                    "iterations of the RANSAC plane fits")
           .real("ransac_threshold", &P::ransac_threshold, "m", 0.001, 1,
                 "inlier distance of the RANSAC plane fits")
           .integer("seed", &P::seed, "", 0, 2147483647, "random seed")
           .real("d_pth", &P::d_pth, "m", 0, 1,
-                "voxels farther than this from the ground plane are obstacles (001 Table I); "
+                "voxels farther than this from the ground plane are obstacles ([Garrote17, Table "
+                "I]); "
                 "with depth_noise_std the threshold grows to noise_k vertical depth sigmas")
           .real("depth_noise_std", &P::depth_noise_std, "m", 0, 1,
                 "depth noise model of the 3D sensor: std of the depth at 1 m range, growing with "
                 "the square of the range (sigma(r) = depth_noise_std r^2); 0: no noise model, "
-                "fixed d_pth (001). Set it to the sensor's noise_std")
+                "fixed d_pth ([Garrote17]). Set it to the sensor's noise_std")
           .real("noise_k", &P::noise_k, "", 0, 20,
                 "voxel z+/z- farther than noise_k vertical noise sigmas at the voxel's range "
                 "(and means farther than noise_k standard errors) are not noise")
           .real("mean_step", &P::mean_step, "m", 0, 1,
                 "a voxel whose mean elevation lies more than this (plus noise_k standard errors) "
-                "off the ground plane is an obstacle: small boxes >= 20 mm (SPEC.md sec. 2); "
+                "off the ground plane is an obstacle: small boxes >= 20 mm ([Puente14, App. Sec. "
+                "VI]); "
                 "0: off")
           .real("max_slope_deg", &P::max_slope_deg, "deg", 0, 45,
                 "off-plane voxels flat within the noise and connected to the ground through "
@@ -89,7 +92,7 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
           .real("mean_k", &P::mean_k, "", 0, 20,
                 "ramp rule: differences of voxel means may exceed the max_slope rise by this "
                 "many standard errors (noise of the means)")
-          .real("k_g", &P::k_g, "", 0, 0.5, "K_g: ground amplitude gain (001 Table I)")
+          .real("k_g", &P::k_g, "", 0, 0.5, "K_g: ground amplitude gain ([Garrote17, Table I])")
           .real("sigma2", &P::sigma2, "m^2", 1e-6, 10, "sigma^2: ISM Gaussian variance")
           .real("k_n", &P::k_n, "", 0, 10, "K_n: voxel density sample normalisation factor")
           .real("d_min", &P::d_min, "", 0, 1000, "d_min: voxel density minimum number of points")
@@ -101,13 +104,13 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
           .real("logodds_max", &P::logodds_max, "", 0.1, 50,
                 "clamp of the fused log-odds (keeps the local grid responsive)")
           .real("band_z_min", &P::band_z_min, "m", -10, 10,
-                "height-band baseline: lowest obstacle height (000 sec. 5.3)")
+                "height-band baseline: lowest obstacle height ([Rosa17, Sec. 5.3])")
           .real("band_z_max", &P::band_z_max, "m", -10, 10,
                 "height-band baseline: highest obstacle height")
           .real("depth_min", &P::depth_min, "m", 0, 100, "shortest valid depth")
           .real("depth_max", &P::depth_max, "m", 0, 100, "longest valid depth")
           .integer("fspf_n_min", &P::fspf_n_min, "", 3, 100000,
-                   "FSPF+ nMin: fewest inliers of an accepted plane (003 Table 3.1)")
+                   "FSPF+ nMin: fewest inliers of an accepted plane ([InterbotDepth, Table 3.1])")
           .integer("fspf_omega", &P::fspf_omega, "px", 1, 10000,
                    "FSPF+ Omega: neighbourhood of the second and third samples")
           .real("fspf_window", &P::fspf_window, "m", 0.01, 10,

@@ -84,7 +84,7 @@ mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMa
   // Coarse pass over the whole window. The coarse step is a whole number of
   // table cells, so for each yaw the scan points are rotated and turned into
   // cell indices once, and every translation of the window is an integer
-  // offset of those indices (Olson 2009, sec. IV: the rotation is the only
+  // offset of those indices ([Olson09csm, Sec. IV]: the rotation is the only
   // costly part of evaluating a pose).
   double bx = prior.x(), by = prior.y(), byaw = prior.phi(), best = -1e9;
   const int nxy = static_cast<int>(std::round(window_xy / p_.coarse_xy));

@@ -449,8 +449,8 @@ class GraphMapper : public Mapper {
     bool in_graph;
   };
 
-  /** Pairwise consistency of loop closures (loop_consistency.h, Olson 2009,
-   *  Mangelson et al. 2018): the closures found in the last
+  /** Pairwise consistency of loop closures (loop_consistency.h, [Olson09],
+   *  [Mangelson18]): the closures found in the last
    *  kConsistencyWindow keyframes (those in the graph and those waiting) are
    *  tested pair by pair against the odometry chain; the largest mutually
    *  consistent set wins. Waiting closures in it enter the graph once it

@@ -75,14 +75,14 @@ TEST(Profile, EveryShippedProfileLoadsAndValidates) {
 TEST(Profile, WalkerValuesFromTheThesis) {
   const Profile p = Profile::load(kIni + "isr-aiwalker.ini");
   const auto r = p.section<RobotParams>("robot");
-  // seed 000 Table 5.1
+  // [Rosa17, Table 5.1]
   EXPECT_DOUBLE_EQ(r.v_max, 0.3);
   EXPECT_DOUBLE_EQ(r.w_max, 0.75);
   EXPECT_DOUBLE_EQ(r.acc_v, 0.5);
   EXPECT_DOUBLE_EQ(r.acc_w, 1.0);
   EXPECT_DOUBLE_EQ(r.safe_distance, 0.325);
   EXPECT_EQ(r.control, "user-intent");
-  // about 0.7 x 0.65 m (SPEC.md sec. 1)
+  // about 0.7 x 0.65 m (docs/design.md, 'Robot profiles')
   double minx = 1e9, maxx = -1e9, miny = 1e9, maxy = -1e9;
   for (const auto& q : r.footprint) {
     minx = std::min(minx, q.x), maxx = std::max(maxx, q.x);

@@ -1,4 +1,4 @@
-// The "rotate in place to relocalise" request (HOBBIT, seed 004) and the
+// The "rotate in place to relocalise" request (HOBBIT, [Puente14, App. Fig. 8]) and the
 // filter's state, on MRPT's real localization_demo data.
 #include <carenav/common/profile.h>
 #include <carenav/io/map_io.h>

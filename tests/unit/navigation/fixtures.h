@@ -5,7 +5,7 @@
 
 namespace carenav::navigation::test {
 
-/** The ISR-AIWALKER-like walker of seed 000 (Table 5.1 limits): 0.70 x
+/** The ISR-AIWALKER-like walker of [Rosa17] (Table 5.1 limits): 0.70 x
  *  0.65 m, axle 0.25 m behind the front. */
 inline RobotParams walkerRobot() {
   RobotParams r;

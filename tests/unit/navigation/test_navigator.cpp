@@ -1,5 +1,5 @@
 // The Navigator's own behaviours (beyond the planners and the supervisor):
-// turning in place when localisation asks for it (HOBBIT, seed 004).
+// turning in place when localisation asks for it (HOBBIT, [Puente14, App. Fig. 8]).
 #include <carenav/navigation/navigator.h>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>

@@ -1,5 +1,5 @@
 // Local planners (user-intent DWA, goal DWA) and the dynamic window, with the
-// walker's settings of seed 000 Table 5.1.
+// walker's settings of [Rosa17, Table 5.1].
 #include <carenav/common/errors.h>
 #include <carenav/navigation/local_planner.h>
 

@@ -343,7 +343,7 @@ TEST(PerceptionNoise, NoisyFlatFloorStaysFreeToFourMetres) {
     EXPECT_EQ(occupiedShare(g, 0.7, 4.2, -1.5, 1.5), 0.0) << "seed " << seed;
     EXPECT_GT(freeShare(g, 0.8, 3.5, -0.5, 0.5), 0.95) << "seed " << seed;
   }
-  // Without the noise model (001's fixed d_pth = 3 cm) the same frame puts
+  // Without the noise model ([Garrote17]'s fixed d_pth = 3 cm) the same frame puts
   // obstacles on the far floor: this is what the noise model fixes.
   const auto fixed = perceive(noisyFrame(s), Method::RrtGpd);
   EXPECT_GT(occupiedShare(fixed.pipe->grid(), 2.0, 3.5, -0.5, 0.5), 0.2);
@@ -404,7 +404,7 @@ TEST(PerceptionNoise, StepOfAStairUpIsNoRamp) {
 }
 
 TEST(PerceptionNoise, TwoCentimetreBoxIsAnObstacleAtOneAndAHalfMetres) {
-  // HOBBIT's 20 mm limit (SPEC.md sec. 2), 1 cm under 001's d_pth = 3 cm;
+  // HOBBIT's 20 mm limit ([Puente14, App. Sec. VI]), 1 cm under [Garrote17]'s d_pth = 3 cm;
   // the step is too abrupt for the traversable-surface rule.
   Scene s;
   s.floor(-10, 10).box({1.5, 1.7, -0.15, 0.15, -2, 0.02});
@@ -443,7 +443,7 @@ TEST(PerceptionNoise, MeanRuleFindsAFlatTwoCentimetreTopThatTheDistanceRuleMisse
   classifyVoxels(g, Plane{}, p, nullptr, cl);
   EXPECT_EQ(classAt(g, cl, 1.6, 0.0), VoxelClass::Obstacle);
   EXPECT_EQ(classAt(g, cl, 1.2, 0.0), VoxelClass::Ground);
-  p.mean_step = 0;  // 001's rule alone: z+ = 2.2 cm < d_pth
+  p.mean_step = 0;  // [Garrote17]'s rule alone: z+ = 2.2 cm < d_pth
   classifyVoxels(g, Plane{}, p, nullptr, cl);
   EXPECT_EQ(classAt(g, cl, 1.6, 0.0), VoxelClass::Ground);
 }
@@ -470,7 +470,7 @@ TEST(PerceptionNoise, RampRuleKeepsSlopesUpToMaxSlopeAndStopsAtSteeperOnes) {
 TEST(PerceptionNoise, VerticalNoiseFollowsTheQuadraticDepthModel) {
   PerceptionParams p;
   const Point3f o{0.2f, 0.f, 0.9f};
-  EXPECT_EQ(verticalNoise(p, &o, 3, 0, 0), 0.0);  // no model: 001's fixed d_pth
+  EXPECT_EQ(verticalNoise(p, &o, 3, 0, 0), 0.0);  // no model: [Garrote17]'s fixed d_pth
   p.depth_noise_std = 0.005;
   EXPECT_EQ(verticalNoise(p, nullptr, 3, 0, 0), 0.0);
   // Floor 2.8 m ahead of the camera: r = sqrt(2.8^2 + 0.9^2), sigma = a r^2

@@ -14,7 +14,7 @@ class InputError : public std::runtime_error {
   explicit InputError(const std::string& what) : std::runtime_error(what) {}
 };
 
-/** Exit codes of the `carenav` binary (DESIGN.md). */
+/** Exit codes of the `carenav` binary (docs/design.md, 'Exit codes and errors'). */
 enum ExitCode : int { kExitOk = 0, kExitRuntime = 1, kExitInput = 2 };
 
 }  // namespace carenav

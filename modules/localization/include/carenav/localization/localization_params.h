@@ -72,7 +72,8 @@ struct LocalizationParams {
   double lost_spread =
       1.0;  ///< m, a converged filter is lost when the spread or a jump of the estimate exceeds
   double free_threshold = 0.7;  ///< cells with p_free above are free (global start, injection)
-  // "rotate in place to relocalise" (HOBBIT, seed 004): a request to the navigation layer
+  // "rotate in place to relocalise" (HOBBIT, [Puente14, App. Fig. 8]): a request to the navigation
+  // layer
   bool rotate_request = false;    ///< raise the request at all
   int rotate_after_updates = 20;  ///< filter updates without convergence before a request
   double rotate_turn = 360;       ///< deg: turned while not converged, the robot counts as turning;

@@ -30,7 +30,7 @@ struct LocalizationEvent {
 };
 
 /** A "rotate in place to relocalise" request to the navigation layer
- *  (HOBBIT, seed 004): raised when the filter has not converged for
+ *  (HOBBIT, [Puente14, App. Fig. 8]): raised when the filter has not converged for
  *  rotate_after_updates filter updates while the robot turned less than
  *  rotate_turn; it ends when the filter converges or once the robot has turned
  *  rotate_turn since the request. */

@@ -1,6 +1,6 @@
 // Global route: A* on the static map inflated by the robot, never through
-// unknown or occupied cells (seed 004: HOBBIT once planned through unknown
-// space), with intermediate goals at the corners of the route (seed 002).
+// unknown or occupied cells ([Puente14, Sec. 3, Fig. 2]: HOBBIT once planned through unknown
+// space), with intermediate goals at the corners of the route ([Conceicao16]).
 #pragma once
 
 #include <carenav/navigation/navigation_params.h>

@@ -34,7 +34,7 @@ struct WorldScan {
  *  a marked cell clears it (a person who walked away); cells not seen for
  *  `persistence` seconds, or farther than `radius` from the robot, are
  *  dropped. This keeps obstacles that left a depth camera's blind zone
- *  (HOBBIT, seed 004: obstacle memory of about 5 s). */
+ *  (HOBBIT, [Puente14, App. Sec. IV-C, Table I]: obstacles remembered 5 s). */
 class ObstacleMemory {
  public:
   ObstacleMemory(double resolution, double persistence, double radius);
@@ -124,7 +124,7 @@ struct FootprintCheck {
 /** A square grid of side `local_size` around a centre, with the Euclidean
  *  distance from every cell to the nearest obstacle cell (exact distance
  *  transform, Felzenszwalb and Huttenlocher 2012), a 0..100 cell cost
- *  falling with that distance (seed 000 sec. 4.1.2: 0 free .. 100
+ *  falling with that distance ([Rosa17, Sec. 4.1.2]: 0 free .. 100
  *  occupied), and footprint queries. */
 class LocalCostmap {
  public:

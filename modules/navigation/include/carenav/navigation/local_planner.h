@@ -32,7 +32,7 @@ struct Trajectory {
   bool leaves_map = false;       ///< the footprint leaves the local grid within the horizon
   double time_to_collision = 0;  ///< s, along the arc (the horizon when none)
   double clearance = 0;          ///< m, smallest footprint clearance along the path (capped)
-  /** m, dist(v, w) of seed 000 Eq. 4.1: how far the footprint sweeps along
+  /** m, dist(v, w) of [Rosa17, Eq. 4.1]: how far the footprint sweeps along
    *  the arc before the first contact (path length plus the turn times the
    *  circumscribed radius); infinity when it reaches the horizon free. */
   double free_distance = 0;
@@ -57,7 +57,7 @@ Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& c
 
 /** True when, braking at the robot's limits along the same arc from `cmd`,
  *  the robot stops at least `margin` metres (of path) before the first
- *  contact `time_to_collision` seconds ahead at that command (seed 000
+ *  contact `time_to_collision` seconds ahead at that command ([Rosa17]
  *  Eq. 4.1 with proportional braking of v and w). */
 bool canBrake(const Twist& cmd, double time_to_collision, const RobotParams& robot, double margin);
 
@@ -81,7 +81,7 @@ struct PlannerOutput {
   std::vector<Trajectory> trajectories;  ///< every candidate (for pictures and tests)
 };
 
-/** The dynamic window (seed 000 Eqs. 4.4-4.7): reachable velocities within
+/** The dynamic window ([Rosa17, Eqs. 4.4-4.7]): reachable velocities within
  *  window_time at the robot's accelerations, inside its limits. */
 struct Window {
   double v_lo = 0, v_hi = 0, w_lo = 0, w_hi = 0;
@@ -131,7 +131,7 @@ class PlannerRegistry {
 TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead,
                         double corner = M_PI, double reached = 0.15);
 
-/** Seed 000's shared control for a walker (Alg. 4, Eq. 4.10). */
+/** [Rosa17]'s shared control for a walker (Alg. 4, Eq. 4.10). */
 std::unique_ptr<LocalPlanner> makeUserIntentDwa(const NavigationParams& p, const RobotParams& r);
 /** Goal-directed DWA: heading to the next waypoint, clearance, speed,
  *  distance to the route; turns in place when the waypoint is far off. */

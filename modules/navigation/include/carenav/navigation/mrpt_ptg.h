@@ -1,6 +1,6 @@
 // The mrpt-ptg local planner: MRPT's TP-space reactive navigation (mrpt::nav
 // PTGs and a holonomic method, the parts CReactiveNavigationSystem is made
-// of) behind carenav's LocalPlanner interface, so that the seeds' dynamic
+// of) behind carenav's LocalPlanner interface, so that the dynamic
 // window can be compared with MRPT's own method on the same scenarios.
 #pragma once
 

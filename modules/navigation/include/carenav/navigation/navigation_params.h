@@ -13,18 +13,18 @@ namespace carenav::navigation {
  *  ```ini
  *  [navigation]
  *  plugin = user-intent-dwa   ; user-intent-dwa | goal-dwa
- *  sim_time = 7.0             ; s (seed 000 Table 5.1)
+ *  sim_time = 7.0             ; s ([Rosa17, Table 5.1])
  *  ```
  */
 struct NavigationParams {
   std::string plugin = "goal-dwa";  ///< local method, by name (LocalPlannerRegistry)
-  // Dynamic window and trajectory rollout (seed 000 Alg. 4, Table 5.1)
+  // Dynamic window and trajectory rollout ([Rosa17, Alg. 4, Table 5.1])
   double sim_time = 3.0;     ///< s, horizon of each sampled trajectory (walker: 7.0)
   double sim_step = 0.1;     ///< s, rollout step
   double window_time = 0.5;  ///< s, time constant of the dynamic window (v +- acc_v * this)
   int v_samples = 12;        ///< samples of v per direction (forward, and backward when allowed)
   int w_samples = 11;        ///< samples of w across the window
-  // Cost of seed 000 Eq. 4.10 (user-intent DWA); k values are not in the seed
+  // Cost of [Rosa17, Eq. 4.10] (user-intent DWA); k values are not in the thesis
   double k_s = 0.01;                 ///< weight of the summed cell cost along the path
   double k_0 = 1.0;                  ///< m, weight of 1 / dist(v, w) (free distance along the arc)
   double k_1 = 0.5;                  ///< penalty when the direction differs from the user's
@@ -40,7 +40,7 @@ struct NavigationParams {
   double score_time = 1.5;        ///< s, goal critics are taken at the pose reached then
   double lookahead = 1.0;         ///< m, waypoint distance along the path ahead of the robot
   double corner_deg = 10;  ///< deg, goal-dwa goes to route vertices turning more (0: cuts all)
-  // Local cost map and obstacle memory (HOBBIT, seed 004)
+  // Local cost map and obstacle memory (HOBBIT, [Puente14, App. Sec. IV-C, Table I])
   double local_size = 8.0;            ///< m, side of the robot-centred local grid
   double resolution = 0.05;           ///< m, cell size of the local grid
   double obstacle_persistence = 5.0;  ///< s, seen obstacles are remembered this long
@@ -67,8 +67,8 @@ struct NavigationParams {
   double plan_cost_weight = 2;  ///< extra route cost per metre near obstacles (keeps paths central)
   double passage_margin = 0.25;   ///< m, route cells closer than radius + this are a narrow passage
   double passage_approach = 0.6;  ///< m, waypoints before and after a passage, on its axis
-  double goal_tolerance = 0.5;    ///< m, goal reached (seed 002)
-  double goal_tolerance_deg = 3;  ///< deg, heading at the goal (seed 002: 0.05 rad)
+  double goal_tolerance = 0.5;    ///< m, goal reached ([Conceicao16])
+  double goal_tolerance_deg = 3;  ///< deg, heading at the goal ([Conceicao16]: 0.05 rad)
   // Safety supervisor
   double sensor_timeout = 0.5;    ///< s, stop when the newest scan is older
   double odom_timeout = 0.5;      ///< s, stop when the newest odometry is older

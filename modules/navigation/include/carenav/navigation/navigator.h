@@ -54,7 +54,7 @@ class Navigator {
                          const std::vector<TPoint2D>& hit_cells, double t);
 
   /** Localisation asks the robot to turn in place to relocalise (HOBBIT,
-   *  seed 004; localization::Localizer::needsRotateInPlace). While set, a
+   *  [Puente14, App. Fig. 8]; localization::Localizer::needsRotateInPlace). While set, a
    *  goal robot's cycle turns on the spot, towards the side where the
    *  footprint can turn freely, instead of following the route; a walker
    *  (its user drives) ignores it. */
@@ -76,7 +76,7 @@ class Navigator {
   };
   Cycle cycle(double now);
 
-  /** The walker's intent fidelity term of one cycle (seed 002 sec. 6.1):
+  /** The walker's intent fidelity term of one cycle ([Conceicao16, Sec. 6.1]):
    *  |cmd - user| in (m/s, rad/s) when the user's own command (within the
    *  robot's limits, above the deadband) is free of collisions over the
    *  horizon on the current cost map; nullopt otherwise (then deviating is

@@ -1,4 +1,4 @@
-// Navigation scenarios run in the simulator, and their metrics (seed 002
+// Navigation scenarios run in the simulator, and their metrics ([Conceicao16]
 // sec. 6.1): `carenav navigate --scenario S.yaml` and `--suite DIR`.
 #pragma once
 
@@ -67,7 +67,7 @@ Scenario parseScenario(const std::string& text, const std::string& origin,
  *  goal given by place name, or a typo the caller reports). */
 std::optional<TPose2D> parsePoseText(const std::string& text);
 
-/** Metrics of one run (seed 002 sec. 6.1). */
+/** Metrics of one run ([Conceicao16, Sec. 6.1]). */
 struct RunMetrics {
   std::string scenario, plugin;
   std::string goal_name;  ///< the resolved room/place when the goal was given by name

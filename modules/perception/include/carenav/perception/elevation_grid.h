@@ -1,4 +1,4 @@
-// 2.5D elevation grid (seed 001 sec. III-A; SPEC.md sec. 2).
+// 2.5D elevation grid ([Garrote17, Sec. III-A]; docs/design.md, 'Perception').
 #pragma once
 
 #include <carenav/perception/cloud.h>
@@ -30,7 +30,7 @@ class ElevationGrid {
   /** Adds the valid points of `robot_frame` (z within [z_min, z_max]), then,
    *  when outlier_sigma > 0, removes per cell the elevations farther than
    *  outlier_sigma standard deviations from the cell mean and recomputes z-,
-   *  z+, N_z, mean and variance (001 Fig. 4). Returns the points used. */
+   *  z+, N_z, mean and variance ([Garrote17, Fig. 4]). Returns the points used. */
   size_t build(const Cloud& robot_frame, double z_min, double z_max, double outlier_sigma);
   void clear();
 
@@ -47,7 +47,7 @@ class ElevationGrid {
 
   /** Inverse-distance weighted elevation (cell means) at robot-frame (x, y)
    *  over the s x s window of cells around it; nullopt when the window holds
-   *  no valid cell (001 sec. IV: IDW). */
+   *  no valid cell ([Garrote17, Sec. IV]: IDW). */
   std::optional<double> idw(double x, double y, int s) const;
 
  private:

@@ -1,4 +1,4 @@
-// Ground-plane detection: RRT-GPD (seed 001 Alg. 1, SPEC.md sec. 2) and the
+// Ground-plane detection: RRT-GPD ([Garrote17, Alg. 1]; docs/design.md, 'Ground plane') and the
 // RANSAC-only baseline.
 #pragma once
 
@@ -57,11 +57,11 @@ struct GroundPlaneResult {
 
 /** Local plane of the s x s neighbourhood centred on robot-frame (x, y): one
  *  point per cell (cell mean, or IDW from the window when the cell is empty);
- *  least squares (SPEC: fitPlane). */
+ *  least squares (fitPlane). */
 std::optional<Plane> localPlane(const ElevationGrid& g, double x, double y, int s);
 
-/** RRT-GPD, 001 Alg. 1 with SPEC.md's decisions. Deterministic for a given
- *  params.seed. */
+/** RRT-GPD, [Garrote17, Alg. 1] with the decisions of docs/design.md, 'Ground plane'. Deterministic
+ * for a given params.seed. */
 GroundPlaneResult detectGroundRrt(const ElevationGrid& g, const PerceptionParams& p);
 
 /** Baseline: RANSAC over the points themselves (what a PCL SACSegmentation

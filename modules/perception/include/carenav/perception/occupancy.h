@@ -1,6 +1,6 @@
-// 2.5D -> 2D: inverse sensor model (seed 001 Eqs. 3-6, SPEC.md sec. 2) and
-// log-odds fusion into a robot-centred local occupancy grid; the height-band
-// and 2D-scan insertions of the baselines use the same grid.
+// 2.5D -> 2D: inverse sensor model ([Garrote17, Eqs. 3-6]; docs/design.md, 'Inverse sensor model')
+// and log-odds fusion into a robot-centred local occupancy grid; the height-band and 2D-scan
+// insertions of the baselines use the same grid.
 #pragma once
 
 #include <carenav/perception/elevation_grid.h>
@@ -30,7 +30,7 @@ enum class VoxelClass : uint8_t { None = 0, Ground, Obstacle };
  *  its strongest free evidence; at endFrame() the cell's p(c|z_t) is the
  *  occupied evidence when there is any (safety first: a voxel's obstacle is
  *  never erased by the floor seen beside it in the same frame), else the free
- *  one, and it is fused in log odds (001 Eq. 3, prior 0.5). */
+ *  one, and it is fused in log odds ([Garrote17, Eq. 3], prior 0.5). */
 class LocalOccupancy {
  public:
   LocalOccupancy(int cells, double resolution, double logodds_max);
@@ -82,12 +82,12 @@ class LocalOccupancy {
 
 /** Noise-aware voxel classification (docs/perceive.md "Noise-aware voxel
  *  rules"), one class per elevation cell (None: no data):
- *  1. distance rule (001): d = max distance of z+ and z- to the plane; the
+ *  1. distance rule ([Garrote17]): d = max distance of z+ and z- to the plane; the
  *     threshold is max(d_pth, noise_k sigma_v), sigma_v the vertical depth
  *     noise at the voxel (depth_noise_std r^2 along the ray from
  *     `sensor_origin`, times the ray's vertical share |dz| / r);
  *  2. mean rule: |mean - plane| > mean_step + noise_k sigma_v / sqrt(N_z)
- *     (small boxes, SPEC.md: >= 20 mm);
+ *     (small boxes >= 20 mm, [Puente14, App. Sec. VI]);
  *  3. traversable surfaces: an off-plane voxel flat within the rule-1
  *     threshold around its own mean and connected (4-neighbours, breadth
  *     first from the plane's ground voxels) through mean steps of at most
@@ -111,12 +111,12 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
                       LocalOccupancy& grid, std::vector<VoxelClass>* classes = nullptr,
                       const Point3f* sensor_origin = nullptr);
 
-/** Voxel density, 001 Eq. (4), h floored at 1 mm (SPEC.md decision). */
+/** Voxel density, [Garrote17, Eq. 4], h floored at 1 mm (docs/design.md, 'Floored height'). */
 double voxelDensity(const ElevationCell& c, double cell_area, const PerceptionParams& p);
 /** Distance of a voxel to the plane: max over (x, y, z+) and (x, y, z-). */
 double voxelPlaneDistance(const ElevationCell& c, double x, double y, const Plane& pl);
 
-/** Height-band baseline (000 sec. 5.3, ROS pointcloud_to_laserscan +
+/** Height-band baseline ([Rosa17, Sec. 5.3], ROS pointcloud_to_laserscan +
  *  local_map): points with band_z_min < z < band_z_max are obstacles; per
  *  bearing bin the cells up to the nearest obstacle (or, without one, up to
  *  the farthest point seen) are free. Returns the number of band points. */

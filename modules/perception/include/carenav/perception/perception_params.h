@@ -1,5 +1,6 @@
 // [perception]: 3D point cloud -> 2.5D elevation grid -> ground plane -> 2D
-// local occupancy grid, and virtual 2D scans from depth (SPEC.md sec. 2-3).
+// local occupancy grid, and virtual 2D scans from depth (docs/design.md, 'Perception' and 'Virtual
+// scans').
 #pragma once
 
 #include <carenav/common/params.h>
@@ -9,18 +10,18 @@
 
 namespace carenav::perception {
 
-/** Parameters of the perception module. Defaults are seed 001 Table I for the
- *  2.5D grid, RRT-GPD and the inverse sensor model; seed 003 Table 3.1 for
- *  FSPF+ and KOS; seed 004 for the max-rule scan. */
+/** Parameters of the perception module. Defaults are [Garrote17, Table I] for the
+ *  2.5D grid, RRT-GPD and the inverse sensor model; [InterbotDepth, Table 3.1] for
+ *  FSPF+ and KOS; [Puente14, App. Sec. IV-A] for the max-rule scan. */
 struct PerceptionParams {
   std::string sensor;  ///< sensorLabel of the 3D observations (empty: every 3D observation)
-  // 2.5D elevation grid (001 sec. III-A)
+  // 2.5D elevation grid ([Garrote17, Sec. III-A])
   int grid_cells = 200;      ///< m_x = m_y
   double resolution = 0.05;  ///< d_r, m
   double outlier_sigma = 3;  ///< per-cell outlier rejection (0 disables)
   double z_min = -1.0;       ///< m, points below are ignored (robot frame)
   double z_max = 2.0;        ///< m, points above are ignored (robot frame)
-  // RRT-GPD (001 Alg. 1)
+  // RRT-GPD ([Garrote17, Alg. 1])
   int rrt_iterations = 600;           ///< K
   double normal_threshold = 0.2;      ///< N_th on 1 - |n.n|
   double elevation_threshold = 0.05;  ///< E_th, m
@@ -33,7 +34,7 @@ struct PerceptionParams {
   int ransac_iterations = 200;      ///< final RANSAC (and the RANSAC-only baseline)
   double ransac_threshold = 0.02;   ///< m, inlier distance of the RANSAC planes
   int seed = 1;                     ///< random seed (deterministic output)
-  // Inverse sensor model (001 Eqs. 4-6)
+  // Inverse sensor model ([Garrote17, Eqs. 4-6])
   double d_pth = 0.03;  ///< m, distance to the ground plane above which a voxel is an obstacle
   // Noise-aware classification (docs/perceive.md "Noise-aware voxel rules")
   double depth_noise_std = 0;  ///< m, depth std at 1 m range, sigma(r) = this * r^2 (0: off)
@@ -50,9 +51,9 @@ struct PerceptionParams {
   double free_threshold = 0.45;      ///< cells below count as free
   double logodds_max = 4.6;          ///< |log-odds| clamp of the fused grid (p 0.99)
   // Baselines
-  double band_z_min = 0.2;  ///< m, height-band projection (000 sec. 5.3)
+  double band_z_min = 0.2;  ///< m, height-band projection ([Rosa17, Sec. 5.3])
   double band_z_max = 1.5;  ///< m
-  // Depth and virtual scans (003, 004)
+  // Depth and virtual scans ([InterbotDepth]; [Puente14, App. Sec. IV-A])
   double depth_min = 0.5;                       ///< m
   double depth_max = 4.5;                       ///< m
   int fspf_n_min = 40;                          ///< nMin

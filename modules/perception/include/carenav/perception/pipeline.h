@@ -20,9 +20,9 @@
 
 namespace carenav::perception {
 
-/** rrt-gpd: 2.5D grid + RRT-GPD + ISM (the method of seed 001);
+/** rrt-gpd: 2.5D grid + RRT-GPD + ISM (the method of [Garrote17]);
  *  ransac: 2.5D grid + RANSAC-only plane over the points + the same ISM;
- *  height-band: 0.2-1.5 m band projection (000 sec. 5.3);
+ *  height-band: 0.2-1.5 m band projection ([Rosa17, Sec. 5.3]);
  *  mrpt-2dscan: MRPT's CObservation3DRangeScan::convertTo2DScan (depth images only). */
 enum class Method { RrtGpd, Ransac, HeightBand, Mrpt2DScan };
 Method parseMethod(const std::string& name);  ///< throws InputError

@@ -1,6 +1,6 @@
-// Virtual 2D scans from depth (SPEC.md sec. 3): FSPF+ plane filtering (003
-// Alg. 3), Kinect Obstacle Scan (003 Alg. 7), HOBBIT's max-rule localisation
-// scan (004) and MRPT's convertTo2DScan baseline.
+// Virtual 2D scans from depth (docs/design.md, 'Virtual scans'): FSPF+ plane filtering
+// ([InterbotDepth, Alg. 3]), Kinect Obstacle Scan ([InterbotDepth, Alg. 7]), HOBBIT's max-rule
+// localisation scan ([Puente14, App. Sec. IV-A]) and MRPT's convertTo2DScan baseline.
 #pragma once
 
 #include <carenav/perception/cloud.h>
@@ -25,13 +25,12 @@ struct FspfResult {
 };
 
 /** FSPF+ on an organised robot-frame cloud whose sensor sits at
- *  `sensor_origin` (robot frame; depth is the distance to it). SPEC.md
- *  decision: pointsLeft starts at the number of eligible pixels, which are
- *  kept in a list (no rejection sampling). Plane classes from the normal and
- *  centroid in the robot frame: horizontal planes within 0.1 m of the floor
- *  are ground, above the sensor ceiling, other horizontal planes "other"
- *  (kept: table tops); vertical planes front / left / right wall. An
- *  unorganised cloud gives an empty result. Deterministic for params.seed. */
+ *  `sensor_origin` (robot frame; depth is the distance to it). carenav's
+ *  decision (docs/design.md, 'Virtual scans'): pointsLeft starts at the number of eligible pixels,
+ * which are kept in a list (no rejection sampling). Plane classes from the normal and centroid in
+ * the robot frame: horizontal planes within 0.1 m of the floor are ground, above the sensor
+ * ceiling, other horizontal planes "other" (kept: table tops); vertical planes front / left / right
+ * wall. An unorganised cloud gives an empty result. Deterministic for params.seed. */
 FspfResult fspfPlus(const Cloud& robot_frame, const Point3f& sensor_origin,
                     const PerceptionParams& p);
 

@@ -17,7 +17,7 @@ namespace carenav::places {
 using mrpt::maps::COccupancyGridMap2D;
 using mrpt::math::TPoint2D;
 
-/** What a place is for (HOBBIT's places, seed 004 sec. IV-D). */
+/** What a place is for (HOBBIT's places, [Puente14, App. Sec. IV-D]). */
 enum class PlaceKind { Place, UserSearch, ObjectSearch, Dock };
 /** "place", "user-search", "object-search", "dock". */
 const char* placeKindName(PlaceKind k);

@@ -1,5 +1,5 @@
-// Brute-force correlative scan matching (after Olson, "Real-time correlative
-// scan matching", ICRA 2009): scores every pose of a search window by how
+// Brute-force correlative scan matching (after [Olson09csm],
+// docs/references.md): scores every pose of a search window by how
 // many scan points land near reference points, coarse then fine. Finds the
 // right basin where ICP from a poor guess slides or turns into a wrong one
 // (laser-only logs with metre-long steps between scans).

@@ -1,7 +1,5 @@
-// Pairwise consistency of loop closures (Olson, "Recognizing places using
-// spectral clustering", ICRA 2009; Mangelson, Dominic, Eustice, Vasudevan,
-// "Pairwise consistent measurement set maximization for robust multi-robot
-// map merging", ICRA 2018, eq. 6-7): two closures i -> j and k -> l agree
+// Pairwise consistency of loop closures ([Olson09]; [Mangelson18, Eqs. 6-7],
+// docs/references.md): two closures i -> j and k -> l agree
 // when the cycle "odometry a -> i, closure i -> j, odometry j -> l, closure
 // l -> k reversed" predicts the second closure from the first within their
 // joint uncertainty (squared Mahalanobis distance of the cycle error under a
