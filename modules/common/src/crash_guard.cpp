@@ -60,7 +60,7 @@ size_t defaultMemoryLimitMB() {
 }
 
 size_t limitAddressSpace(size_t megabytes) {
-  if (megabytes == 0) return 0;
+  if (megabytes == 0 || builtWithAddressSanitizer()) return 0;
   rlimit rl{};
   if (::getrlimit(RLIMIT_AS, &rl) != 0) return 0;
   rlim_t want = static_cast<rlim_t>(megabytes) * 1024 * 1024;

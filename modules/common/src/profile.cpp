@@ -387,8 +387,9 @@ std::string Profile::resolvedText() const {
       for (const auto* c : cands)
         if (c->variant_value == v) schema = c;
     }
-    auto entryOf = [&](const std::string& key) -> const Entry* {
-      for (const auto& [k, e] : sec)
+    const auto& entries = sec;  // a structured binding cannot be captured in C++17
+    auto entryOf = [&entries](const std::string& key) -> const Entry* {
+      for (const auto& [k, e] : entries)
         if (k == key) return &e;
       return nullptr;
     };

@@ -421,6 +421,10 @@ RosMapYaml readRosMapYaml(const std::string& yaml_path) {
   if (!(m.resolution > 0))
     err.at(y.at("resolution").line,
            "'resolution' must be > 0 metres per pixel, got " + y.at("resolution").scalar);
+  if (!(m.resolution >= kMinResolution && m.resolution <= kMaxResolution))
+    err.at(y.at("resolution").line,
+           "'resolution' must be within [0.001, 100] metres per pixel, got " +
+               y.at("resolution").scalar);
 
   const auto org = y.find("origin");
   if (org == y.end())
@@ -512,8 +516,8 @@ GreyImage readImageGrey(const std::string& path) {
 }
 
 COccupancyGridMap2D gridFromImage(const GreyImage& img, const ImageGridOptions& o) {
-  if (!(o.resolution > 0) || !std::isfinite(o.resolution))
-    throw InputError("image resolution must be > 0 metres per pixel");
+  if (!(o.resolution >= kMinResolution && o.resolution <= kMaxResolution))
+    throw InputError("image resolution must be within [0.001, 100] metres per pixel");
   const size_t w = img.width, h = img.height;
   using Cell = COccupancyGridMap2D::cellType;
   const Cell occupied = COccupancyGridMap2D::p2l(0.0f);

@@ -182,7 +182,11 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   std::unique_ptr<GlobalPlanner> gp;
   if (goal_mode) {
     gp = std::make_unique<GlobalPlanner>(world->grid(), fp.inscribed, nav);
-    route = gp->plan({sc.start.x, sc.start.y}, {goal->x, goal->y});
+    try {
+      route = gp->plan({sc.start.x, sc.start.y}, {goal->x, goal->y});
+    } catch (const InputError& e) {  // a start or goal off the map: the scenario's fault
+      throw InputError(sc.file + ": " + e.what());
+    }
     if (route) navigator.setRoute(withStart({sc.start.x, sc.start.y}, route->waypoints), *goal);
     if (!loc_sensor.empty()) {
       loc = std::make_unique<localization::Localizer>(world->grid(), locp);

@@ -321,6 +321,8 @@ TEST(MapIo, MalformedRosMapsAreInputErrorsNamingFileAndProblem) {
   yamlCase("no_origin.yaml", "image: ok.pgm\nresolution: 0.1\n", {"missing key 'origin'"});
   yamlCase("neg_res.yaml", rosYaml("ok.pgm", "", "-0.05"), {":2:", "'resolution' must be > 0"});
   yamlCase("zero_res.yaml", rosYaml("ok.pgm", "", "0"), {":2:", "'resolution' must be > 0"});
+  yamlCase("tiny_res.yaml", rosYaml("ok.pgm", "", "1e-300"), {":2:", "within [0.001, 100]"});
+  yamlCase("huge_res.yaml", rosYaml("ok.pgm", "", "1e9"), {":2:", "within [0.001, 100]"});
   yamlCase("text_res.yaml", rosYaml("ok.pgm", "", "fine"), {":2:", "must be a number", "fine"});
   yamlCase("origin2.yaml", rosYaml("ok.pgm", "", "0.1", "[1, 2]"), {":3:", "3 numbers"});
   yamlCase("origin_text.yaml", rosYaml("ok.pgm", "", "0.1", "here"), {":3:", "3 numbers"});

@@ -19,10 +19,27 @@ namespace carenav {
  *  with code 2; otherwise they re-raise the signal (a real bug stays a crash). */
 void installCrashGuard();
 
+/** True in a build with AddressSanitizer (CARENAV_SANITIZE, CARENAV_FUZZ). */
+constexpr bool builtWithAddressSanitizer() {
+#if defined(__SANITIZE_ADDRESS__)
+  return true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+  return true;
+#else
+  return false;
+#endif
+#else
+  return false;
+#endif
+}
+
 /** Caps the process address space (setrlimit RLIMIT_AS) so that a corrupt
  *  size field makes an allocation fail (std::bad_alloc, reported as corrupt
  *  input) instead of exhausting the machine. `megabytes` 0 keeps no cap.
- *  Returns the cap applied, in MB. */
+ *  Returns the cap applied, in MB. Under AddressSanitizer, which reserves
+ *  terabytes of shadow memory, no cap is set (0): ASan's own allocator
+ *  limits apply instead. */
 size_t limitAddressSpace(size_t megabytes);
 
 /** Default cap: $CARENAV_MEMORY_LIMIT_MB if set (0: none), else 3/4 of the

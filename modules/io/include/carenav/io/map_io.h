@@ -125,6 +125,11 @@ COccupancyGridMap2D readRosMap(const std::string& yaml_path);
 inline constexpr uint64_t kMaxImageSide = 65536;
 inline constexpr uint64_t kMaxImagePixels = uint64_t{1} << 27;
 
+/** Map resolutions read from files, metres per cell: 1 mm to 100 m (MRPT's
+ *  grids hold the resolution as a float; 0 or 1e-300 would become 0). */
+inline constexpr double kMinResolution = 0.001;
+inline constexpr double kMaxResolution = 100;
+
 /** An 8-bit image reduced to one value per pixel, row 0 at the top. The
  *  channel sum is kept because map_server averages channels in floating
  *  point: a colour pixel's mean need not be a whole number. */
