@@ -227,6 +227,7 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
   if (!scans_out.open(scans_path)) throw std::runtime_error(scans_path + ": cannot write");
   auto scans_arch = mrpt::serialization::archiveFrom(scans_out);
   double total_ms = 0;
+  size_t frames_without_points = 0;  // no valid point inside the grid's z band
 
   auto handle = [&](Cloud& cloud, const Point3f& origin, mrpt::obs::CObservation3DRangeScan* obs,
                     const mrpt::poses::CPose2D& odo, const std::string& label) {
@@ -237,6 +238,7 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
     in.odometry = odo;
     const FrameResult r = pipe.process(in, true);
     const size_t f = res.frames++;
+    if (r.points_valid == 0) ++frames_without_points;
     char name[64];
     std::snprintf(name, sizeof(name), "frame_%04zu", f);
     const fs::path base = fs::path(o.out_dir) / name;
@@ -289,6 +291,7 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
                        ": a single cloud needs the sensor pose: --sensor-pose "
                        "x,y,z,yaw,pitch,roll or a depth-camera sensor in the profile");
     Cloud cam = readCloudFile(o.cloud);
+    res.warnings = checkCloudContent(o.cloud, cam);
     Cloud robot = toRobotFrame(cam, *o.sensor_pose, true);
     const Point3f origin{static_cast<float>(o.sensor_pose->x()),
                          static_cast<float>(o.sensor_pose->y()),
@@ -337,7 +340,18 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
                        (o.method == Method::Mrpt2DScan ? " with a depth image" : ""));
   }
   j.endArray();
+  if (frames_without_points > 0)
+    res.warnings.push_back(
+        (o.rawlog.empty() ? o.cloud : o.rawlog) + ": " + std::to_string(frames_without_points) +
+        " of " + std::to_string(res.frames) +
+        " frame(s) had no usable point (none valid, or none in the local grid, z " +
+        std::to_string(o.params.z_min) + " to " + std::to_string(o.params.z_max) +
+        " m): no information, the cells stay unknown");
   j.key("frame_count").value(static_cast<uint64_t>(res.frames));
+  j.key("frames_without_points").value(static_cast<uint64_t>(frames_without_points));
+  j.key("warnings").beginArray();
+  for (const auto& w : res.warnings) j.value(w);
+  j.endArray();
   j.key("mean_total_ms").value(res.frames ? total_ms / res.frames : 0.0);
   j.endObject();
   scans_out.close();

@@ -85,6 +85,8 @@ struct PerceiveOptions {
 };
 struct PerceiveResult {
   size_t frames = 0;
+  /** Accepted but suspicious input (also in summary.json "warnings"); the CLI prints them. */
+  std::vector<std::string> warnings;
   std::vector<std::string> outputs;
 };
 PerceiveResult runPerceive(const PerceiveOptions& o);
