@@ -174,3 +174,19 @@ TEST(CliPerceive, AFewAbsurdPointsAreIgnoredWithAWarning) {
   const std::string s = slurp(d / "out" / "summary.json");
   EXPECT_NE(s.find("2 of 402 points"), std::string::npos) << s;
 }
+
+TEST(CliPerceive, Office1WithASensorPoseOffByFortyCentimetresFindsTheFloorAndSaysSo) {
+  // The camera is 1.4 m high; given as 1.0 m the floor lies 0.4 m below the
+  // robot's z = 0. A too-small tree is never the plane (it was a 2-node plane
+  // tilted 27.9 deg): the floor is found and the offset reported.
+  const auto out = scratch() / "perceive_office1_low_pose";
+  const auto r = carenav({"perceive", "--profile", kProfile, "--cloud", kOffice, "--out",
+                          out.string(), "--sensor-pose", "0,0,1.0,0,0,0"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("check the sensor pose"), std::string::npos) << r.err;
+  const std::string s = slurp(out / "summary.json");
+  EXPECT_NE(s.find("\"plane_source\": \"rrt-gpd\""), std::string::npos) << s;
+  EXPECT_LT(jsonReal(s, "plane_tilt_deg"), 6.0);
+  EXPECT_LT(jsonReal(s, "plane_prior_offset_m"), -0.2);
+  EXPECT_GE(jsonNumber(s, "rrt_nodes"), 10u);
+}

@@ -32,6 +32,9 @@ struct FrameResult {
   size_t points_total = 0, points_valid = 0;
   std::optional<Plane> plane;  ///< robot frame, normal up
   std::string plane_source;    ///< rrt-gpd | ransac | nominal (z = 0) | none
+  /** Why the plane is nominal (no seed / every tree refused), or that it lies farther from
+   *  the robot's floor than prior_height_tolerance; empty otherwise. */
+  std::string plane_note;
   GroundPlaneResult ground;
   IsmStats ism;
   CellCounts counts;
