@@ -71,6 +71,7 @@ void addPerceiveCommand(CLI::App& app, const GlobalOptions& g) {
         o.sensor_pose = poseOf(s);
     }
     const auto r = perception::runPerceive(o);
+    for (const auto& w : r.warnings) std::cerr << "[perceive] warning: " << w << "\n";
     if (!g.quiet) {
       std::cerr << "[perceive] " << r.frames << " frame(s), method " << a->method << "\n";
       for (const auto& f : r.outputs)

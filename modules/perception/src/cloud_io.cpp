@@ -3,12 +3,14 @@
 #include <carenav/perception/cloud.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 namespace carenav::perception {
@@ -22,11 +24,59 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
+/** `s` made safe to print: at most `max_len` characters, every byte outside
+ *  printable ASCII written as \xHH (a PNG given as .pcd must not send binary
+ *  bytes to the terminal). */
+std::string printable(const std::string& s, size_t max_len = 60) {
+  static const char* hex = "0123456789abcdef";
+  std::string out;
+  for (size_t i = 0; i < s.size() && i < max_len; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c >= 0x20 && c < 0x7f) {
+      out += static_cast<char>(c);
+    } else {
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  if (s.size() > max_len) out += "...";
+  return out;
+}
+
+/** True when a header line holds bytes no text header has (NUL and other
+ *  control characters than tab/CR; UTF-8 in comments is fine). */
+bool binaryBytes(const std::string& line) {
+  for (char ch : line) {
+    const auto c = static_cast<unsigned char>(ch);
+    if ((c < 0x20 && c != '\t' && c != '\r') || c == 0x7f) return true;
+  }
+  return false;
+}
+
+constexpr size_t kMaxHeaderLine = 65536;
+
+/** a * b, or nullopt when it overflows size_t. */
+std::optional<size_t> mulSize(size_t a, size_t b) {
+  size_t r = 0;
+  if (__builtin_mul_overflow(a, b, &r)) return std::nullopt;
+  return r;
+}
+
 std::string slurpFile(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
+  std::ifstream f(path, std::ios::binary | std::ios::ate);
   if (!f) throw InputError(path + ": cannot open the file");
-  std::string s((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  if (s.empty()) throw InputError(path + ": the file is empty");
+  const std::streamoff size = f.tellg();
+  if (size < 0) throw InputError(path + ": cannot read the file (not a regular file?)");
+  if (static_cast<uint64_t>(size) > kMaxCloudFileBytes)
+    throw InputError(path + ": the file has " + std::to_string(size) +
+                     " bytes, more than the limit for a point cloud file (" +
+                     std::to_string(kMaxCloudFileBytes) + ")");
+  if (size == 0) throw InputError(path + ": the file is empty");
+  f.seekg(0);
+  std::string s(static_cast<size_t>(size), '\0');
+  f.read(s.data(), size);
+  if (f.gcount() != size) throw InputError(path + ": cannot read the whole file");
   return s;
 }
 
@@ -45,7 +95,7 @@ long toLong(const std::string& path, const std::string& what, const std::string&
     if (pos != s.size() || v < 0) throw std::invalid_argument("");
     return v;
   } catch (const std::exception&) {
-    throw InputError(path + ": " + what + " is not a non-negative integer: '" + s + "'");
+    throw InputError(path + ": " + what + " is not a non-negative integer: '" + printable(s) + "'");
   }
 }
 
@@ -53,8 +103,23 @@ double toDouble(const std::string& path, const std::string& where, const std::st
   const char* b = s.c_str();
   char* e = nullptr;
   const double v = std::strtod(b, &e);
-  if (e == b || *e != 0) throw InputError(path + ": " + where + ": not a number: '" + s + "'");
+  if (e == b || *e != 0)
+    throw InputError(path + ": " + where + ": not a number: '" + printable(s) + "'");
   return v;
+}
+
+/** Refuses a declared point count that exceeds the documented limit or that
+ *  the bytes left in the file cannot hold (`min_bytes_per_point` each). */
+void checkDeclaredPoints(const std::string& path, const std::string& what, size_t n,
+                         size_t bytes_left, size_t min_bytes_per_point) {
+  if (n > kMaxCloudPoints)
+    throw InputError(path + ": " + what + " declares " + std::to_string(n) +
+                     " points, more than the limit of " + std::to_string(kMaxCloudPoints));
+  const auto need = mulSize(n, min_bytes_per_point);
+  if (!need || *need > bytes_left + 1)  // + 1: the last line may lack its newline
+    throw InputError(path + ": " + what + " declares " + std::to_string(n) + " points but the " +
+                     std::to_string(bytes_left) + " bytes after the header cannot hold them " +
+                     "(truncated file or wrong header)");
 }
 
 /** Reads one scalar of the given kind ('F','I','U') and size from bytes. */
@@ -142,7 +207,8 @@ bool lzfDecompress(const uint8_t* in, size_t n_in, uint8_t* out, size_t n_out) {
 Cloud readPcd(const std::string& path) {
   const std::string data = slurpFile(path);
   std::vector<std::string> fields, types;
-  std::vector<int> sizes, counts;
+  std::vector<int> sizes;
+  std::vector<size_t> counts;
   long width = -1, height = -1, npoints = -1;
   std::string encoding;
   size_t pos = 0;
@@ -152,14 +218,21 @@ Cloud readPcd(const std::string& path) {
       throw InputError(path + ": PCD header ends before its DATA line (not a PCD file?)");
     size_t eol = data.find('\n', pos);
     if (eol == std::string::npos) eol = data.size();
-    std::string line = data.substr(pos, eol - pos);
-    pos = std::min(eol + 1, data.size() + 1);
+    std::string line = data.substr(pos, std::min(eol - pos, kMaxHeaderLine));
+    if (eol - pos > kMaxHeaderLine)
+      throw InputError(path + ": PCD header line " + std::to_string(line_no + 1) +
+                       " is longer than " + std::to_string(kMaxHeaderLine) +
+                       " bytes (not a PCD file?)");
+    pos = eol + 1;  // may be data.size() + 1 when the DATA line has no newline
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (binaryBytes(line))
+      throw InputError(path + ": not a PCD file: header line " + std::to_string(line_no) +
+                       " holds binary bytes ('" + printable(line, 24) + "')");
     auto t = tokens(line);
     if (t.empty() || t[0][0] == '#') continue;
     const std::string& k = t[0];
-    const std::string where = "header line " + std::to_string(line_no) + " (" + k + ")";
+    const std::string where = "header line " + std::to_string(line_no) + " (" + printable(k) + ")";
     if (k == "VERSION" || k == "VIEWPOINT") continue;
     if (k == "FIELDS") {
       fields.assign(t.begin() + 1, t.end());
@@ -173,12 +246,18 @@ Cloud readPcd(const std::string& path) {
     } else if (k == "TYPE") {
       for (size_t i = 1; i < t.size(); ++i) {
         if (t[i] != "F" && t[i] != "I" && t[i] != "U")
-          throw InputError(path + ": " + where + ": type must be F, I or U, not '" + t[i] + "'");
+          throw InputError(path + ": " + where + ": type must be F, I or U, not '" +
+                           printable(t[i]) + "'");
         types.push_back(t[i]);
       }
     } else if (k == "COUNT") {
-      for (size_t i = 1; i < t.size(); ++i)
-        counts.push_back(static_cast<int>(toLong(path, where, t[i])));
+      for (size_t i = 1; i < t.size(); ++i) {
+        const long cnt = toLong(path, where, t[i]);
+        if (cnt < 1 || static_cast<uint64_t>(cnt) > kMaxFieldCount)
+          throw InputError(path + ": " + where + ": COUNT " + std::to_string(cnt) +
+                           " must be between 1 and " + std::to_string(kMaxFieldCount));
+        counts.push_back(static_cast<size_t>(cnt));
+      }
     } else if (k == "WIDTH" && t.size() == 2) {
       width = toLong(path, where, t[1]);
     } else if (k == "HEIGHT" && t.size() == 2) {
@@ -188,7 +267,7 @@ Cloud readPcd(const std::string& path) {
     } else if (k == "DATA" && t.size() == 2) {
       encoding = t[1];
     } else {
-      throw InputError(path + ": malformed PCD " + where + ": '" + line + "'");
+      throw InputError(path + ": malformed PCD " + where + ": '" + printable(line) + "'");
     }
   }
   if (fields.empty()) throw InputError(path + ": PCD header has no FIELDS line");
@@ -198,14 +277,18 @@ Cloud readPcd(const std::string& path) {
     throw InputError(path + ": PCD header: FIELDS, SIZE, TYPE and COUNT have different lengths");
   for (size_t i = 0; i < fields.size(); ++i)
     if (types[i] == "F" && sizes[i] != 4 && sizes[i] != 8)
-      throw InputError(path + ": PCD header: float field '" + fields[i] + "' has size " +
+      throw InputError(path + ": PCD header: float field '" + printable(fields[i]) + "' has size " +
                        std::to_string(sizes[i]));
   if (width < 0) throw InputError(path + ": PCD header has no WIDTH");
   if (height < 0) height = 1;
-  if (npoints < 0) npoints = width * height;
-  if (npoints != width * height)
+  const auto wh = mulSize(static_cast<size_t>(width), static_cast<size_t>(height));
+  if (!wh)
+    throw InputError(path + ": PCD header: WIDTH " + std::to_string(width) + " x HEIGHT " +
+                     std::to_string(height) + " overflows");
+  if (npoints < 0) npoints = static_cast<long>(std::min<size_t>(*wh, LONG_MAX));
+  if (static_cast<size_t>(npoints) != *wh)
     throw InputError(path + ": PCD header: POINTS " + std::to_string(npoints) +
-                     " != WIDTH*HEIGHT " + std::to_string(width * height));
+                     " != WIDTH*HEIGHT " + std::to_string(*wh));
   int ix = -1, iy = -1, iz = -1;
   for (size_t i = 0; i < fields.size(); ++i) {
     if (fields[i] == "x") ix = static_cast<int>(i);
@@ -215,12 +298,10 @@ Cloud readPcd(const std::string& path) {
   if (ix < 0 || iy < 0 || iz < 0)
     throw InputError(path + ": PCD has no x, y and z fields (FIELDS lists none of them)");
 
-  Cloud c;
-  c.width = static_cast<size_t>(width);
-  c.height = static_cast<size_t>(height);
-  const size_t n = static_cast<size_t>(npoints);
-  c.points.resize(n);
+  const size_t n = *wh;
   // Byte offset of each field inside a record (binary) and token index (ascii).
+  // Every count is <= kMaxFieldCount and every size <= 8, so the sums over at
+  // most (file size) fields cannot overflow.
   std::vector<size_t> off(fields.size()), tok(fields.size());
   size_t rec = 0, ntok = 0;
   for (size_t i = 0; i < fields.size(); ++i) {
@@ -229,9 +310,17 @@ Cloud readPcd(const std::string& path) {
     rec += static_cast<size_t>(sizes[i]) * counts[i];
     ntok += counts[i];
   }
+  const size_t body = std::min(pos, data.size());
+  const size_t left = data.size() - body;
   const int idx[3] = {ix, iy, iz};
+  Cloud c;
+  c.width = static_cast<size_t>(width);
+  c.height = static_cast<size_t>(height);
   if (encoding == "ascii") {
-    std::istringstream ss(data.substr(std::min(pos, data.size())));
+    // A point is ntok numbers, each at least one character and a separator.
+    checkDeclaredPoints(path, "PCD header (ascii)", n, left, 2 * ntok);
+    c.points.resize(n);
+    std::istringstream ss(data.substr(body));
     std::string line;
     size_t k = 0;
     while (k < n && std::getline(ss, line)) {
@@ -253,17 +342,18 @@ Cloud readPcd(const std::string& path) {
     if (k < n)
       throw InputError(path + ": PCD truncated: " + std::to_string(k) + " of " + std::to_string(n) +
                        " points");
-    std::string rest;
     while (std::getline(ss, line))
       if (!tokens(line).empty())
         throw InputError(path + ": PCD has more points than POINTS " + std::to_string(n));
   } else if (encoding == "binary") {
-    const size_t need = n * rec;
-    if (pos > data.size() || data.size() - pos < need)
-      throw InputError(path + ": PCD binary data truncated: " +
-                       std::to_string(pos > data.size() ? 0 : data.size() - pos) + " bytes of " +
-                       std::to_string(need));
-    const char* base = data.data() + pos;
+    const auto need = mulSize(n, rec);
+    if (!need || left < *need)
+      throw InputError(path + ": PCD binary data truncated: " + std::to_string(left) +
+                       " bytes of " + (need ? std::to_string(*need) : std::string("(overflow)")) +
+                       " for " + std::to_string(n) + " points");
+    checkDeclaredPoints(path, "PCD header (binary)", n, left, rec);
+    c.points.resize(n);
+    const char* base = data.data() + body;
     for (size_t k = 0; k < n; ++k) {
       float v[3];
       for (int a = 0; a < 3; ++a)
@@ -272,27 +362,38 @@ Cloud readPcd(const std::string& path) {
       c.points[k] = {v[0], v[1], v[2]};
     }
   } else if (encoding == "binary_compressed") {
-    if (pos > data.size() || data.size() - pos < 8)
+    if (left < 8)
       throw InputError(path + ": PCD binary_compressed data truncated (no size header)");
     uint32_t comp = 0, uncomp = 0;
-    std::memcpy(&comp, data.data() + pos, 4);
-    std::memcpy(&uncomp, data.data() + pos + 4, 4);
-    if (uncomp != n * rec)
+    std::memcpy(&comp, data.data() + body, 4);
+    std::memcpy(&uncomp, data.data() + body + 4, 4);
+    const auto need = mulSize(n, rec);
+    if (!need || uncomp != *need)
       throw InputError(path + ": PCD binary_compressed: uncompressed size " +
-                       std::to_string(uncomp) + " != POINTS*record " + std::to_string(n * rec));
-    if (data.size() - pos - 8 < comp)
+                       std::to_string(uncomp) + " != POINTS*record " +
+                       (need ? std::to_string(*need) : std::string("(overflow)")) + " for " +
+                       std::to_string(n) + " points");
+    if (left - 8 < comp)
       throw InputError(path + ": PCD binary_compressed data truncated: " +
-                       std::to_string(data.size() - pos - 8) + " bytes of " + std::to_string(comp));
+                       std::to_string(left - 8) + " bytes of " + std::to_string(comp));
+    // LZF expands at most 264 bytes out of 3 in (a long back reference).
+    if (static_cast<uint64_t>(uncomp) > 88ull * comp + 88)
+      throw InputError(path + ": PCD binary_compressed: " + std::to_string(comp) +
+                       " compressed bytes cannot hold " + std::to_string(uncomp) + " bytes");
+    if (n > kMaxCloudPoints)
+      throw InputError(path + ": PCD header declares " + std::to_string(n) +
+                       " points, more than the limit of " + std::to_string(kMaxCloudPoints));
     std::vector<uint8_t> raw(uncomp);
-    if (n > 0 && !lzfDecompress(reinterpret_cast<const uint8_t*>(data.data() + pos + 8), comp,
+    if (n > 0 && !lzfDecompress(reinterpret_cast<const uint8_t*>(data.data() + body + 8), comp,
                                 raw.data(), raw.size()))
       throw InputError(path + ": PCD binary_compressed data is corrupt (LZF)");
+    c.points.resize(n);
     // Field-major layout: all values of field 0, then field 1, ...
     std::vector<size_t> foff(fields.size());
     size_t acc = 0;
     for (size_t i = 0; i < fields.size(); ++i) {
       foff[i] = acc;
-      acc += n * sizes[i] * counts[i];
+      acc += n * sizes[i] * counts[i];  // <= uncomp
     }
     for (size_t k = 0; k < n; ++k) {
       float v[3];
@@ -305,7 +406,7 @@ Cloud readPcd(const std::string& path) {
       c.points[k] = {v[0], v[1], v[2]};
     }
   } else {
-    throw InputError(path + ": PCD DATA '" + encoding +
+    throw InputError(path + ": PCD DATA '" + printable(encoding) +
                      "' is not ascii, binary or binary_compressed");
   }
   if (c.height <= 1) c.height = 1;
@@ -314,19 +415,37 @@ Cloud readPcd(const std::string& path) {
 
 Cloud readPly(const std::string& path) {
   const std::string data = slurpFile(path);
-  std::istringstream hs(data);
+  size_t pos = 0;
+  int line_no = 0;
+  // Next header line (without '\n' / '\r'); false at the end of the data.
+  auto nextLine = [&](std::string& line) {
+    if (pos >= data.size()) return false;
+    size_t eol = data.find('\n', pos);
+    if (eol == std::string::npos) eol = data.size();
+    if (eol - pos > kMaxHeaderLine)
+      throw InputError(path + ": PLY header line " + std::to_string(line_no + 1) +
+                       " is longer than " + std::to_string(kMaxHeaderLine) +
+                       " bytes (not a PLY file?)");
+    line = data.substr(pos, eol - pos);
+    pos = std::min(eol + 1, data.size());
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (binaryBytes(line))
+      throw InputError(path + ": not a PLY file: header line " + std::to_string(line_no) +
+                       " holds binary bytes ('" + printable(line, 24) + "')");
+    return true;
+  };
   std::string line;
-  if (!std::getline(hs, line) || tokens(line) != std::vector<std::string>{"ply"})
+  if (!nextLine(line) || tokens(line) != std::vector<std::string>{"ply"})
     throw InputError(path + ": not a PLY file (first line is not 'ply')");
   std::string format;
   long nvert = -1;
-  bool in_vertex = false, vertex_seen = false, ended = false;
+  bool in_vertex = false, vertex_seen = false, ended = false, other_elements = false;
   struct Prop {
     std::string name, type;
     int size;
   };
   std::vector<Prop> props;
-  int line_no = 1;
   auto typeSize = [&](const std::string& t) -> int {
     if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
     if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
@@ -335,11 +454,9 @@ Cloud readPly(const std::string& path) {
       return 4;
     if (t == "double" || t == "float64") return 8;
     throw InputError(path + ": PLY header line " + std::to_string(line_no) +
-                     ": unknown property type '" + t + "'");
+                     ": unknown property type '" + printable(t) + "'");
   };
-  while (std::getline(hs, line)) {
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
+  while (nextLine(line)) {
     auto t = tokens(line);
     if (t.empty() || t[0] == "comment" || t[0] == "obj_info") continue;
     const std::string where = "PLY header line " + std::to_string(line_no);
@@ -352,9 +469,10 @@ Cloud readPly(const std::string& path) {
         in_vertex = vertex_seen = true;
       } else {
         if (!vertex_seen)
-          throw InputError(path + ": " + where + ": element '" + t[1] +
+          throw InputError(path + ": " + where + ": element '" + printable(t[1]) +
                            "' before the vertex element is not supported");
         in_vertex = false;
+        other_elements = true;
       }
     } else if (t[0] == "property" && t.size() >= 3) {
       if (in_vertex) {
@@ -366,7 +484,7 @@ Cloud readPly(const std::string& path) {
       ended = true;
       break;
     } else {
-      throw InputError(path + ": malformed " + where + ": '" + line + "'");
+      throw InputError(path + ": malformed " + where + ": '" + printable(line) + "'");
     }
   }
   if (!ended) throw InputError(path + ": PLY header has no end_header line");
@@ -380,13 +498,16 @@ Cloud readPly(const std::string& path) {
   if (ix < 0 || iy < 0 || iz < 0)
     throw InputError(path + ": PLY vertex element has no x, y and z properties");
   const size_t n = static_cast<size_t>(nvert);
+  const size_t body = pos;  // <= data.size(), also when end_header has no newline
+  const size_t left = data.size() - body;
   Cloud c;
-  c.points.resize(n);
   c.width = n;
   c.height = 1;
   const int idx[3] = {ix, iy, iz};
-  const size_t body = static_cast<size_t>(hs.tellg());
   if (format == "ascii") {
+    checkDeclaredPoints(path, "PLY header (ascii vertex element)", n, left, 2 * props.size());
+    c.points.resize(n);
+    std::istringstream hs(data.substr(body));
     size_t k = 0;
     while (k < n && std::getline(hs, line)) {
       auto t = tokens(line);
@@ -407,6 +528,11 @@ Cloud readPly(const std::string& path) {
     if (k < n)
       throw InputError(path + ": PLY truncated: " + std::to_string(k) + " of " + std::to_string(n) +
                        " vertices");
+    if (!other_elements)  // nothing may follow the vertices
+      while (std::getline(hs, line))
+        if (!tokens(line).empty())
+          throw InputError(path + ": PLY has more vertex lines than 'element vertex " +
+                           std::to_string(n) + "'");
   } else if (format == "binary_little_endian") {
     std::vector<size_t> off(props.size());
     size_t rec = 0;
@@ -414,10 +540,17 @@ Cloud readPly(const std::string& path) {
       off[i] = rec;
       rec += props[i].size;
     }
-    if (data.size() - body < n * rec)
-      throw InputError(path + ": PLY binary data truncated: " + std::to_string(data.size() - body) +
-                       " bytes of " + std::to_string(n * rec) + " for " + std::to_string(n) +
-                       " vertices");
+    const auto need = mulSize(n, rec);
+    if (!need || left < *need)
+      throw InputError(path + ": PLY binary data truncated: " + std::to_string(left) +
+                       " bytes of " + (need ? std::to_string(*need) : std::string("(overflow)")) +
+                       " for " + std::to_string(n) + " vertices");
+    if (!other_elements && left - *need >= rec)
+      throw InputError(path + ": PLY has " + std::to_string(left - *need) + " bytes after its " +
+                       std::to_string(n) +
+                       " vertices (more vertices than 'element vertex' declares?)");
+    checkDeclaredPoints(path, "PLY header (binary vertex element)", n, left, rec);
+    c.points.resize(n);
     const char* b = data.data() + body;
     for (size_t k = 0; k < n; ++k) {
       float v[3];
@@ -434,7 +567,7 @@ Cloud readPly(const std::string& path) {
   } else if (format.empty()) {
     throw InputError(path + ": PLY header has no format line");
   } else {
-    throw InputError(path + ": PLY format '" + format +
+    throw InputError(path + ": PLY format '" + printable(format) +
                      "' is not supported (ascii or binary_little_endian)");
   }
   return c;
@@ -446,6 +579,33 @@ Cloud readCloudFile(const std::string& path) {
   if (ext == ".pcd") return readPcd(path);
   if (ext == ".ply") return readPly(path);
   throw InputError(path + ": unknown point cloud format (expected .pcd or .ply)");
+}
+
+std::vector<std::string> checkCloudContent(const std::string& path, const Cloud& c) {
+  std::vector<std::string> warnings;
+  if (c.points.empty()) throw InputError(path + ": the cloud holds no point");
+  size_t valid = 0, absurd = 0;
+  for (const auto& p : c.points) {
+    if (validPoint(p)) {
+      ++valid;
+      continue;
+    }
+    const bool nan = std::isnan(p.x) || std::isnan(p.y) || std::isnan(p.z);
+    const bool zero = p.x == 0.f && p.y == 0.f && p.z == 0.f;
+    if (!nan && !zero) ++absurd;  // infinite or beyond 1e6 m
+  }
+  const std::string counts = std::to_string(c.points.size()) + " points: " + std::to_string(valid) +
+                             " valid, " + std::to_string(absurd) +
+                             " infinite or beyond 1e6 m, the rest NaN or zero depth";
+  if (valid == 0) throw InputError(path + ": the cloud has no valid point (" + counts + ")");
+  if (valid < 3)
+    throw InputError(path + ": the cloud has only " + std::to_string(valid) +
+                     " valid point(s); a ground plane needs at least 3 (" + counts + ")");
+  if (absurd > 0)
+    warnings.push_back(path + ": " + std::to_string(absurd) + " of " +
+                       std::to_string(c.points.size()) +
+                       " points are infinite or beyond 1e6 m and were ignored");
+  return warnings;
 }
 
 void writePcd(const std::string& path, const Cloud& c, PcdEncoding enc) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace carenav::perception {
 
@@ -247,17 +248,45 @@ GroundPlaneResult growTree(const ElevationGrid& g, const PerceptionParams& p, co
     centroid += (Eigen::Vector2d(xe, ye) - centroid) / static_cast<double>(res.nodes.size());
   }
 
-  // 4. RANSAC over the node centres -> g_plane.
-  if (res.nodes.size() >= 3) {
-    std::vector<Eigen::Vector3d> pts;
-    pts.reserve(res.nodes.size());
-    for (const auto& n : res.nodes) pts.push_back(n.p);
-    auto rr = ransacPlane(pts, p.ransac_iterations, p.ransac_threshold, rng);
-    res.plane = rr.plane;
-    res.ransac_inliers = rr.inliers;
-  }
-  if (!res.plane) res.plane = seed_plane;  // a tree that never grew: the seed's plane
+  // 4. (RANSAC over the node centres) is done by the caller, which also
+  // refuses trees smaller than min_tree_nodes: no seed plane is ever taken
+  // as the ground on its own.
   return res;
+}
+
+}  // namespace
+
+namespace {
+
+struct Candidate {
+  Plane plane;
+  size_t support = 0;  ///< tree nodes within ransac_threshold of the plane
+};
+
+/** Planes of a tree's node centres, each supported by at least min_tree_nodes
+ *  nodes: RANSAC over the nodes, then again over the nodes the earlier planes
+ *  left, up to `max_planes` (a tree that crept from the floor onto a plateau
+ *  holds both). `enough` ends the search early (the first plane is the floor
+ *  under the robot in the common case). */
+template <class Enough>
+std::vector<Candidate> nodePlanes(const std::vector<RrtNode>& nodes, const PerceptionParams& p,
+                                  std::mt19937& rng, int max_planes, Enough&& enough) {
+  std::vector<Candidate> out;
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(nodes.size());
+  for (const auto& n : nodes) pts.push_back(n.p);
+  const size_t min_support = static_cast<size_t>(std::max(3, p.min_tree_nodes));
+  for (int k = 0; k < max_planes && pts.size() >= min_support; ++k) {
+    const auto rr = ransacPlane(pts, p.ransac_iterations, p.ransac_threshold, rng);
+    if (!rr.plane || rr.inliers < min_support) break;
+    out.push_back({*rr.plane, rr.inliers});
+    if (enough(out.back())) break;
+    std::vector<Eigen::Vector3d> rest;
+    for (const auto& q : pts)
+      if (rr.plane->distance(q.x(), q.y(), q.z()) > p.ransac_threshold) rest.push_back(q);
+    pts.swap(rest);
+  }
+  return out;
 }
 
 }  // namespace
@@ -266,38 +295,117 @@ GroundPlaneResult detectGroundRrt(const ElevationGrid& g, const PerceptionParams
   const int m = g.cells(), s = p.window;
   const Eigen::Vector3d up(0, 0, 1);
   // 1. nearestValidSeed: square rings around the robot cell (robot at the grid
-  // centre); a valid seed is a cell with at least d_min samples near the floor
-  // the robot stands on (|z| <= seed_max_elevation: the robot pose is the
-  // initial guess) whose s x s neighbourhood gives a valid, upright plane.
-  // When a seed's tree stays smaller than min_tree_nodes (a seed on a small
-  // flat object cannot expand, [Garrote17, Sec. III-B]), the next valid seed at least
-  // d_n away is tried, up to seed_attempts; the largest tree wins.
-  std::vector<Seed> seeds;
-  const int c0 = m / 2;
-  for (int r = 0; r <= m / 2 && static_cast<int>(seeds.size()) < p.seed_attempts; ++r)
-    for (int i = c0 - r; i <= c0 + r; ++i)
-      for (int j = c0 - r; j <= c0 + r; ++j) {
-        if (static_cast<int>(seeds.size()) >= p.seed_attempts) break;
-        if (std::max(std::abs(i - c0), std::abs(j - c0)) != r || !g.valid(i, j)) continue;
-        if (g.at(i, j).n < static_cast<uint32_t>(std::max(1.0, p.d_min))) continue;  // sparse
-        if (std::abs(g.at(i, j).mean) > p.seed_max_elevation) continue;  // not the robot's floor
-        const double x = g.centre(i), y = g.centre(j);
-        bool far = true;
-        for (const auto& sd : seeds)
-          if (std::hypot(sd.p.x() - x, sd.p.y() - y) < p.expansion_distance) far = false;
-        if (!far) continue;
-        auto pl = localPlane(g, x, y, s);
-        if (!pl || (p.seed_upright && !similar(pl->normal(), up, p.normal_threshold))) continue;
-        const auto z = pl->zAt(x, y);
-        seeds.push_back({{x, y, z ? *z : g.at(i, j).mean}, *pl});
+  // centre); a valid seed is a cell with at least d_min samples whose s x s
+  // neighbourhood gives a valid, upright plane. First pass: seeds near the
+  // floor the robot stands on (|z| <= seed_max_elevation: the robot pose and
+  // the sensor mounting are the prior, [Garrote17, Alg. 1]'s initial guess).
+  // Second pass, only when the first gave no plane: seeds on the largest level
+  // surface at another height (a sensor pose that is off, the robot's own
+  // floor out of view); the plane found is reported as far from the prior
+  // (prior_offset).
+  // Second pass: the largest level surface outside the prior's band, i.e. the
+  // 10 cm height bin holding the most dense cells (a horizontal surface fills
+  // many cells, a wall few); seeds within one bin of its centre.
+  double level = 0;
+  auto modalLevel = [&]() {
+    constexpr double kBin = 0.1;
+    std::vector<int> hist(2048, 0);
+    int best_n = 0;
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < m; ++j) {
+        if (!g.valid(i, j) || g.at(i, j).n < static_cast<uint32_t>(std::max(1.0, p.d_min)))
+          continue;
+        const double z = g.at(i, j).mean;
+        if (std::abs(z) <= p.seed_max_elevation) continue;
+        const int b = std::clamp(static_cast<int>(std::floor(z / kBin)) + 1024, 0, 2047);
+        if (++hist[b] > best_n) {
+          best_n = hist[b];
+          level = (b - 1024 + 0.5) * kBin;
+        }
       }
-  GroundPlaneResult best;
-  for (size_t k = 0; k < seeds.size(); ++k) {
-    GroundPlaneResult r = growTree(g, p, seeds[k], static_cast<uint32_t>(p.seed) + 7919u * k);
-    if (r.nodes.size() > best.nodes.size()) best = std::move(r);
-    if (static_cast<int>(best.nodes.size()) >= p.min_tree_nodes) break;
+    return best_n > 0;
+  };
+  auto collect = [&](bool near_prior) {
+    std::vector<Seed> seeds;
+    const int c0 = m / 2;
+    for (int r = 0; r <= m / 2 && static_cast<int>(seeds.size()) < p.seed_attempts; ++r)
+      for (int i = c0 - r; i <= c0 + r; ++i)
+        for (int j = c0 - r; j <= c0 + r; ++j) {
+          if (static_cast<int>(seeds.size()) >= p.seed_attempts) break;
+          if (std::max(std::abs(i - c0), std::abs(j - c0)) != r || !g.valid(i, j)) continue;
+          if (g.at(i, j).n < static_cast<uint32_t>(std::max(1.0, p.d_min))) continue;  // sparse
+          const double zc = g.at(i, j).mean;
+          if (near_prior ? std::abs(zc) > p.seed_max_elevation
+                         : (std::abs(zc) <= p.seed_max_elevation || std::abs(zc - level) > 0.1))
+            continue;
+          const double x = g.centre(i), y = g.centre(j);
+          bool far = true;
+          for (const auto& sd : seeds)
+            if (std::hypot(sd.p.x() - x, sd.p.y() - y) < p.expansion_distance) far = false;
+          if (!far) continue;
+          auto pl = localPlane(g, x, y, s);
+          if (!pl || (p.seed_upright && !similar(pl->normal(), up, p.normal_threshold))) continue;
+          const auto z = pl->zAt(x, y);
+          seeds.push_back({{x, y, z ? *z : g.at(i, j).mean}, *pl});
+        }
+    return seeds;
+  };
+  // 2-4. A tree per seed (the RRT, then RANSAC over its node centres). A tree
+  // smaller than min_tree_nodes is refused: a seed on a small flat object
+  // cannot expand ([Garrote17, Sec. III-B]) and its plane says nothing about
+  // the floor (a 2-node tree gave a 27.9 deg "floor"). Among the planes of the
+  // accepted trees (each from >= min_tree_nodes nodes, upright), the one
+  // closest to the floor under the robot (|z| at the robot, x = y = 0) wins:
+  // a tree that crept from the robot's floor onto a 5 cm plateau holds both
+  // planes, and the plateau must not become the ground because it is larger.
+  // Seeds are tried until a plane within prior_height_tolerance of the
+  // robot's floor is found, up to seed_attempts per pass.
+  GroundPlaneResult best, largest;
+  double best_off = std::numeric_limits<double>::infinity();
+  size_t best_support = 0;
+  int grown = 0, refused = 0;
+  bool seed_found = false;
+  auto consistent = [&](const Candidate& c) {
+    const auto z0 = c.plane.zAt(0, 0);
+    return z0 && std::abs(*z0) <= p.prior_height_tolerance &&
+           (!p.seed_upright || similar(c.plane.normal(), up, p.normal_threshold));
+  };
+  for (int pass = 0; pass < 2 && !best.plane; ++pass) {
+    if (pass == 1 && !modalLevel()) break;
+    const auto seeds = collect(pass == 0);
+    seed_found = seed_found || !seeds.empty();
+    for (const auto& sd : seeds) {
+      const uint32_t rs = static_cast<uint32_t>(p.seed) + 7919u * static_cast<uint32_t>(grown++);
+      GroundPlaneResult r = growTree(g, p, sd, rs);
+      if (static_cast<int>(r.nodes.size()) < p.min_tree_nodes) {
+        ++refused;
+        if (r.nodes.size() > largest.nodes.size()) largest = std::move(r);
+        continue;
+      }
+      std::mt19937 rng(rs + 1u);
+      for (const auto& c : nodePlanes(r.nodes, p, rng, 3, consistent)) {
+        if (p.seed_upright && !similar(c.plane.normal(), up, p.normal_threshold)) continue;
+        const auto z0 = c.plane.zAt(0, 0);
+        if (!z0) continue;
+        const double off = std::abs(*z0);
+        if (off < best_off - 1e-3 || (off <= best_off + 1e-3 && c.support > best_support)) {
+          best_off = off;
+          best_support = c.support;
+          best = r;  // the tree is kept for the picture
+          best.plane = c.plane;
+          best.ransac_inliers = c.support;
+          best.prior_offset = *z0;
+          best.wide_search = pass == 1;
+        }
+      }
+      if (best.plane && best_off <= p.prior_height_tolerance) break;
+    }
   }
-  return best;
+  GroundPlaneResult& out = best.plane ? best : largest;
+  out.seed_found = seed_found;
+  out.trees_grown = grown;
+  out.trees_refused = refused;
+  return out;
 }
 
 GroundPlaneResult detectGroundRansac(const Cloud& c, const PerceptionParams& p, size_t max_points) {

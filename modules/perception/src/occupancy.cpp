@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace carenav::perception {
 
@@ -342,6 +343,29 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
     order_r = g.resolution();
   }
   constexpr int kSaturated = 3;
+  // Occlusion is not free space: per 1 deg bearing bin, the distance of the
+  // nearest voxel holding points in this frame (the near edge of the view).
+  // A cell without points farther than that along a ray lies in a shadow
+  // (behind a drop-off, a hole, a box): the ray passed above it, it never saw
+  // its floor, so it gets no free evidence (it stays unknown, or keeps what
+  // earlier frames said). Cells nearer than the edge (the camera's blind zone
+  // close to the robot) keep the rays' free evidence, as before.
+  constexpr int kBins = 360;
+  auto binOf = [&](double x, double y) {
+    const int b = static_cast<int>(std::floor((std::atan2(y, x) + M_PI) * kBins / (2 * M_PI)));
+    return std::clamp(b, 0, kBins - 1);
+  };
+  thread_local std::vector<float> edge, edge_raw;
+  edge_raw.assign(kBins, std::numeric_limits<float>::infinity());
+  for (int32_t k = 0; k < m * m; ++k) {
+    if (classes[k] == VoxelClass::None) continue;
+    const double x = g.centre(k / m), y = g.centre(k % m);
+    float& e = edge_raw[binOf(x, y)];
+    e = std::min(e, static_cast<float>(std::hypot(x, y)));
+  }
+  edge.resize(kBins);
+  for (int b = 0; b < kBins; ++b)
+    edge[b] = std::min({edge_raw[(b + kBins - 1) % kBins], edge_raw[b], edge_raw[(b + 1) % kBins]});
   for (const int32_t k : order) {
     const VoxelClass vc = classes[k];
     if (vc == VoxelClass::None) continue;
@@ -357,9 +381,16 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
     const int vi = grid.cellX(wx), vj = grid.cellY(wy);
     // |c| in [0, |c_v|], [Garrote17, Eq. 5], from the voxel back to the robot.
     int sat = 0;
+    const double near_edge = edge[binOf(x, y)] + g.resolution();
     grid.walkSegment(wx, wy, cv, 0.0, [&](int ci, int cj, double dc) {
       const bool at_voxel = ci == vi && cj == vj;
       const double D = at_voxel ? 0.0 : std::min(0.0, dc - cv);
+      if (!at_voxel && dc > near_edge && cv > 1e-9) {
+        const int ei = g.cellOf(x * dc / cv), ej = g.cellOf(y * dc / cv);
+        if (g.inside(ei, ej) && classes[static_cast<size_t>(ei) * m + ej] == VoxelClass::None &&
+            (obstacle ? amp * lut(gauss, D) : kg + (0.5f - kg) * lut(sigm, D)) < 0.5f)
+          return true;  // a shadow cell: no free evidence
+      }
       // (The thesis, [Rosa17, Ch. 3], writes the ground branch with the Gaussian
       // exp(-D^2 / 2 sigma^2) inside the sigmoid; carenav uses the paper's form: docs/design.md,
       // 'Inverse sensor model'.)

@@ -61,7 +61,12 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
                    "RRT-GPD: seeds tried (each at least d_n from the others) while the tree "
                    "stays smaller than min_tree_nodes")
           .integer("min_tree_nodes", &P::min_tree_nodes, "", 1, 100000,
-                   "RRT-GPD: a tree with this many nodes is accepted")
+                   "RRT-GPD: a tree needs this many nodes (and its plane this many inliers) to "
+                   "give the ground plane; smaller trees are refused")
+          .real("prior_height_tolerance", &P::prior_height_tolerance, "m", 0, 10,
+                "RRT-GPD: a plane whose height at the robot is within this of z = 0 (the floor "
+                "the mounting says the robot stands on) ends the seed attempts; the plane "
+                "nearest to z = 0 wins, one farther is reported in summary.json")
           .real("seed_max_elevation", &P::seed_max_elevation, "m", 0, 100,
                 "the RRT seed must lie within this height of the floor the robot stands on "
                 "(robot frame z = 0): the robot pose is the initial guess of [Garrote17, Alg. 1]")

@@ -76,9 +76,25 @@ FrameResult Pipeline::process(const FrameInput& in, bool virtual_scans) {
       if (r.ground.plane) {
         r.plane = r.ground.plane;
         r.plane_source = methodName(method_);
+        if (method_ == Method::RrtGpd &&
+            std::abs(r.ground.prior_offset) > p_.prior_height_tolerance) {
+          char buf[160];
+          std::snprintf(buf, sizeof(buf),
+                        "ground plane %.3f m from the robot's floor z = 0 at the robot (more "
+                        "than prior_height_tolerance %.3f m): check the sensor pose",
+                        r.ground.prior_offset, p_.prior_height_tolerance);
+          r.plane_note = buf;
+        }
       } else {
-        r.plane = Plane{};  // nothing plane-like seen: the floor the robot stands on
+        // Nothing plane-like seen, or only trees smaller than min_tree_nodes:
+        // the floor the robot stands on (the mounting prior), never a small tree.
+        r.plane = Plane{};
         r.plane_source = "nominal";
+        r.plane_note = r.ground.trees_refused > 0
+                           ? std::to_string(r.ground.trees_refused) +
+                                 " RRT tree(s) smaller than min_tree_nodes refused: nominal "
+                                 "floor z = 0"
+                           : std::string("no ground seed: nominal floor z = 0");
       }
     }
     r.timing_ms.emplace_back("ground_plane", msSince(t));
@@ -227,6 +243,8 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
   if (!scans_out.open(scans_path)) throw std::runtime_error(scans_path + ": cannot write");
   auto scans_arch = mrpt::serialization::archiveFrom(scans_out);
   double total_ms = 0;
+  size_t frames_without_points = 0;  // no valid point inside the grid's z band
+  size_t frames_far_plane = 0, frames_refused = 0;
 
   auto handle = [&](Cloud& cloud, const Point3f& origin, mrpt::obs::CObservation3DRangeScan* obs,
                     const mrpt::poses::CPose2D& odo, const std::string& label) {
@@ -237,6 +255,9 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
     in.odometry = odo;
     const FrameResult r = pipe.process(in, true);
     const size_t f = res.frames++;
+    if (r.points_valid == 0) ++frames_without_points;
+    if (r.plane_source == "nominal" && r.ground.trees_refused > 0) ++frames_refused;
+    if (!r.plane_note.empty() && r.plane_source != "nominal") ++frames_far_plane;
     char name[64];
     std::snprintf(name, sizeof(name), "frame_%04zu", f);
     const fs::path base = fs::path(o.out_dir) / name;
@@ -255,6 +276,12 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
     writePlane(j, r.plane);
     j.key("plane_source").value(r.plane_source);
     if (r.plane) j.key("plane_tilt_deg").value(std::acos(std::min(1.0, r.plane->c)) * 180 / M_PI);
+    j.key("plane_note").value(r.plane_note);
+    if (o.method == Method::RrtGpd) {
+      j.key("plane_prior_offset_m").value(r.ground.plane ? r.ground.prior_offset : 0.0);
+      j.key("rrt_trees").value(r.ground.trees_grown);
+      j.key("rrt_trees_refused").value(r.ground.trees_refused);
+    }
     j.key("rrt_nodes").value(static_cast<uint64_t>(r.ground.nodes.size()));
     j.key("ransac_inliers").value(static_cast<uint64_t>(r.ground.ransac_inliers));
     j.key("voxels").beginObject().key("total").value(static_cast<uint64_t>(r.ism.voxels));
@@ -289,6 +316,7 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
                        ": a single cloud needs the sensor pose: --sensor-pose "
                        "x,y,z,yaw,pitch,roll or a depth-camera sensor in the profile");
     Cloud cam = readCloudFile(o.cloud);
+    res.warnings = checkCloudContent(o.cloud, cam);
     Cloud robot = toRobotFrame(cam, *o.sensor_pose, true);
     const Point3f origin{static_cast<float>(o.sensor_pose->x()),
                          static_cast<float>(o.sensor_pose->y()),
@@ -337,7 +365,29 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
                        (o.method == Method::Mrpt2DScan ? " with a depth image" : ""));
   }
   j.endArray();
+  if (frames_without_points > 0)
+    res.warnings.push_back(
+        (o.rawlog.empty() ? o.cloud : o.rawlog) + ": " + std::to_string(frames_without_points) +
+        " of " + std::to_string(res.frames) +
+        " frame(s) had no usable point (none valid, or none in the local grid, z " +
+        std::to_string(o.params.z_min) + " to " + std::to_string(o.params.z_max) +
+        " m): no information, the cells stay unknown");
+  const std::string input = o.rawlog.empty() ? o.cloud : o.rawlog;
+  if (frames_refused > 0)
+    res.warnings.push_back(input + ": " + std::to_string(frames_refused) + " of " +
+                           std::to_string(res.frames) +
+                           " frame(s): every RRT tree was smaller than min_tree_nodes; the "
+                           "nominal floor z = 0 was used (see plane_note)");
+  if (frames_far_plane > 0)
+    res.warnings.push_back(input + ": " + std::to_string(frames_far_plane) + " of " +
+                           std::to_string(res.frames) +
+                           " frame(s): ground plane farther than prior_height_tolerance from "
+                           "the robot's floor z = 0 (see plane_note; check the sensor pose)");
   j.key("frame_count").value(static_cast<uint64_t>(res.frames));
+  j.key("frames_without_points").value(static_cast<uint64_t>(frames_without_points));
+  j.key("warnings").beginArray();
+  for (const auto& w : res.warnings) j.value(w);
+  j.endArray();
   j.key("mean_total_ms").value(res.frames ? total_ms / res.frames : 0.0);
   j.endObject();
   scans_out.close();

@@ -6,6 +6,7 @@
 #include <mrpt/poses/CPose3D.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -32,16 +33,36 @@ inline bool validPoint(const Point3f& p) {
          !(p.x == 0.f && p.y == 0.f && p.z == 0.f);
 }
 
+/** Limits of the cloud readers (docs/perceive.md, 'Bad input'): checked
+ *  against the header and the file size before anything is allocated.
+ *  2^24 points is 55 Kinect frames (640 x 480) or a 64-beam lidar sweep
+ *  times 60; 1 GiB holds that many points in ascii. */
+constexpr size_t kMaxCloudPoints = size_t{1} << 24;
+constexpr uint64_t kMaxCloudFileBytes = uint64_t{1} << 30;
+/** Largest PCD COUNT of one field (PCL's largest descriptors have a few hundred). */
+constexpr uint64_t kMaxFieldCount = 65536;
+
 /** Reads a PCD file (VERSION 0.7 header; DATA ascii, binary or
  *  binary_compressed; fields x y z required, others ignored). Throws
  *  InputError naming the file and the problem (missing/malformed header
- *  field, POINTS != WIDTH*HEIGHT, truncated data, bad number...). */
+ *  field, POINTS != WIDTH*HEIGHT, truncated data, bad number, sizes beyond
+ *  the limits above or beyond what the file can hold...); messages never
+ *  carry raw bytes of the file (non-printable bytes are written \xHH). */
 Cloud readPcd(const std::string& path);
 /** Reads the vertex element of a PLY file (ascii or binary_little_endian;
- *  properties x y z required). Throws InputError like readPcd. */
+ *  properties x y z required). Throws InputError like readPcd. Without
+ *  further elements, data after the declared vertices is an error (the header
+ *  declares fewer vertices than the file holds). */
 Cloud readPly(const std::string& path);
 /** readPcd or readPly by extension (.pcd / .ply); anything else is an InputError. */
 Cloud readCloudFile(const std::string& path);
+
+/** Content check of a cloud read from a file for `perceive --cloud` (docs/perceive.md,
+ *  'Bad input'). InputError naming `path` when the cloud holds no point, no valid point
+ *  (all NaN, infinite, zero depth or beyond 1e6 m) or fewer than 3 valid points (no
+ *  plane, no obstacle map can come out of it). Returns the warnings of an accepted
+ *  cloud: points with absurd coordinates (infinite or beyond 1e6 m) that are ignored. */
+std::vector<std::string> checkCloudContent(const std::string& path, const Cloud& c);
 
 enum class PcdEncoding { Ascii, Binary };
 void writePcd(const std::string& path, const Cloud& c, PcdEncoding enc);

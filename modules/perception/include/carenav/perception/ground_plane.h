@@ -53,6 +53,10 @@ struct GroundPlaneResult {
   int iterations = 0;           ///< RRT iterations run
   int expansions_rejected = 0;  ///< candidate nodes that failed both tests
   size_t ransac_inliers = 0;
+  int trees_grown = 0;       ///< RRT-GPD: trees grown (one per seed tried)
+  int trees_refused = 0;     ///< RRT-GPD: trees smaller than min_tree_nodes, never a plane
+  double prior_offset = 0;   ///< RRT-GPD: plane height at the robot (x = y = 0), m
+  bool wide_search = false;  ///< RRT-GPD: plane from a seed beyond seed_max_elevation
 };
 
 /** Local plane of the s x s neighbourhood centred on robot-frame (x, y): one
@@ -61,7 +65,10 @@ struct GroundPlaneResult {
 std::optional<Plane> localPlane(const ElevationGrid& g, double x, double y, int s);
 
 /** RRT-GPD, [Garrote17, Alg. 1] with the decisions of docs/design.md, 'Ground plane'. Deterministic
- * for a given params.seed. */
+ * for a given params.seed. A tree smaller than min_tree_nodes never gives the plane; among the
+ * planes of the accepted trees the one nearest to the robot's floor (z = 0 at the robot) wins.
+ * No plane (nullopt) when every tree was refused or no seed exists: the caller falls back to the
+ * nominal plane. */
 GroundPlaneResult detectGroundRrt(const ElevationGrid& g, const PerceptionParams& p);
 
 /** Baseline: RANSAC over the points themselves (what a PCL SACSegmentation

@@ -22,14 +22,15 @@ struct PerceptionParams {
   double z_min = -1.0;       ///< m, points below are ignored (robot frame)
   double z_max = 2.0;        ///< m, points above are ignored (robot frame)
   // RRT-GPD ([Garrote17, Alg. 1])
-  int rrt_iterations = 600;           ///< K
-  double normal_threshold = 0.2;      ///< N_th on 1 - |n.n|
-  double elevation_threshold = 0.05;  ///< E_th, m
-  int window = 3;                     ///< s_x = s_y, cells
-  double expansion_distance = 0.4;    ///< d_n, m
-  bool seed_upright = true;           ///< seed plane must pass the normal test against +z
-  int seed_attempts = 5;              ///< seeds tried when a tree stays small
-  int min_tree_nodes = 10;            ///< a tree this large ends the seed attempts
+  int rrt_iterations = 600;              ///< K
+  double normal_threshold = 0.2;         ///< N_th on 1 - |n.n|
+  double elevation_threshold = 0.05;     ///< E_th, m
+  int window = 3;                        ///< s_x = s_y, cells
+  double expansion_distance = 0.4;       ///< d_n, m
+  bool seed_upright = true;              ///< seed plane must pass the normal test against +z
+  int seed_attempts = 5;                 ///< seeds tried when a tree stays small
+  int min_tree_nodes = 10;               ///< smaller trees are refused (never the ground plane)
+  double prior_height_tolerance = 0.02;  ///< m, plane height at the robot consistent with z = 0
   double seed_max_elevation = 0.3;  ///< m, seed elevation within this of the robot's floor (z = 0)
   int ransac_iterations = 200;      ///< final RANSAC (and the RANSAC-only baseline)
   double ransac_threshold = 0.02;   ///< m, inlier distance of the RANSAC planes

@@ -32,6 +32,9 @@ struct FrameResult {
   size_t points_total = 0, points_valid = 0;
   std::optional<Plane> plane;  ///< robot frame, normal up
   std::string plane_source;    ///< rrt-gpd | ransac | nominal (z = 0) | none
+  /** Why the plane is nominal (no seed / every tree refused), or that it lies farther from
+   *  the robot's floor than prior_height_tolerance; empty otherwise. */
+  std::string plane_note;
   GroundPlaneResult ground;
   IsmStats ism;
   CellCounts counts;
@@ -85,6 +88,8 @@ struct PerceiveOptions {
 };
 struct PerceiveResult {
   size_t frames = 0;
+  /** Accepted but suspicious input (also in summary.json "warnings"); the CLI prints them. */
+  std::vector<std::string> warnings;
   std::vector<std::string> outputs;
 };
 PerceiveResult runPerceive(const PerceiveOptions& o);
