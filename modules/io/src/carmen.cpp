@@ -264,11 +264,13 @@ class Fields {
   /** The ipc_timestamp, third field from the end: UNIX seconds. Plain
    *  decimals convert exactly to MRPT's 100 ns ticks; the double in `secs`
    *  is for the TUM file and the statistics. */
-  mrpt::Clock::time_point timestamp(double& secs) const {
+  /** Empty for a negative ipc_timestamp: real logs have a few (acapulco,
+   *  infinite-corridor, freiburg-campus of Radish), the caller skips the line. */
+  std::optional<mrpt::Clock::time_point> timestamp(double& secs) const {
     const size_t i = f_.size() - 3;
     secs = real(i, "ipc_timestamp");
     (void)real(f_.size() - 1, "logger_timestamp");  // the line must end as it should
-    if (secs < 0) fail("ipc_timestamp is negative: '" + printable(f_[i]) + "'");
+    if (secs < 0) return std::nullopt;
     static const mrpt::Clock::time_point kUnixEpoch = mrpt::Clock::fromDouble(0);
     std::string_view s = f_[i];
     if (!s.empty() && s[0] == '+') s.remove_prefix(1);
@@ -416,6 +418,12 @@ std::string CarmenImportStats::toText() const {
   o << "scans:        " << totalScans();
   if (!scans.empty()) o << " (" << joinCounts(scans) << ")";
   o << "\n";
+  if (!negative_time.empty()) {
+    uint64_t n = 0;
+    for (const auto& [k, v] : negative_time) n += v;
+    o << "skipped:      " << n << " line(s) with a negative ipc_timestamp ("
+      << joinCounts(negative_time) << ")\n";
+  }
   o << "odometry:     " << odometry << " (source: " << toString(odometry_source) << ")\n";
   if (observations)
     o << "time span:    " << fmtTime(min_time) << " .. " << fmtTime(max_time) << " s ("
@@ -451,6 +459,9 @@ std::string CarmenImportStats::toJson() const {
   j.key("unknown").beginObject();
   for (const auto& [k, v] : unknown) j.key(k).value(v);
   j.endObject();
+  j.key("negative_time").beginObject();
+  for (const auto& [k, v] : negative_time) j.key(k).value(v);
+  j.endObject();
   j.key("unused").beginObject();
   for (const auto& [k, v] : unused) j.key(k).value(v);
   j.endObject();
@@ -469,6 +480,9 @@ std::string CarmenImportStats::notesText() const {
   for (const auto& [k, v] : unused)
     s += "skipped " + std::to_string(v) + " " + k + " line" + (v == 1 ? "" : "s") +
          " (odometry source is '" + toString(odometry_source) + "'; --odometry odom uses them)\n";
+  for (const auto& [k, v] : negative_time)
+    s += "skipped " + std::to_string(v) + " " + k + " line" + (v == 1 ? "" : "s") +
+         " with a negative ipc_timestamp (a logger artefact; left out)\n";
   if (empty_scans)
     s += "skipped " + std::to_string(empty_scans) + " laser message(s) with no reading\n";
   if (scans_time_backwards)
@@ -647,7 +661,12 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
                                        (poses ? "x y theta odom_x odom_y odom_theta, " : "") +
                                        "ipc_timestamp ipc_hostname logger_timestamp");
         double t = 0;
-        const auto stamp = f.timestamp(t);
+        const auto stamp_or = f.timestamp(t);
+        if (!stamp_or) {
+          ++st.negative_time[f.type()];
+          continue;
+        }
+        const auto stamp = *stamp_or;
         ScanGeometry g;
         g.increment = oldLaserIncrement(n, front  ? par.front_resolution
                                            : rear ? par.rear_resolution
@@ -707,7 +726,12 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
         for (size_t k = 0; k < m; ++k)
           (void)f.anyNumber(10 + n + k, "remission " + std::to_string(k));
         double t = 0;
-        const auto stamp = f.timestamp(t);
+        const auto stamp_or = f.timestamp(t);
+        if (!stamp_or) {
+          ++st.negative_time[f.type()];
+          continue;
+        }
+        const auto stamp = *stamp_or;
         if (res > 0)
           g.increment = res;
         else if (fov > 0 && n > 1)
@@ -747,8 +771,12 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
         (void)f.real(6, "accel");
         double t = 0;
         const auto stamp = f.timestamp(t);
+        if (!stamp) {
+          ++st.negative_time["ODOM"];
+          continue;
+        }
         if (odom_lines)
-          writeOdometry(pose, std::make_pair(tv, rv), stamp, t);
+          writeOdometry(pose, std::make_pair(tv, rv), *stamp, t);
         else
           ++st.unused["ODOM"];
         continue;
