@@ -4,8 +4,9 @@
 #include <carenav/io/carmen.h>
 #include <carenav/io/trajectory.h>
 
+#include "gz_input.h"
+
 #include <mrpt/core/Clock.h>
-#include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservationOdometry.h>
@@ -122,20 +123,22 @@ class LineSource {
 
   uint64_t lineNumber() const { return line_no_; }
   uint64_t fileSize() const { return file_size_; }
-  uint64_t filePosition() { return gzipped_ ? in_.getPosition() : bytes_; }
+  /** Bytes of the file read so far (compressed bytes for a .gz): comparable
+   *  with fileSize(), for progress. */
+  uint64_t filePosition() { return std::min(in_.filePosition(), file_size_); }
   bool gzipped() const { return gzipped_; }
 
  private:
   std::string where(uint64_t line) const { return path_ + ":" + std::to_string(line) + ": "; }
 
   bool fill() {
-    const size_t n = in_.Read(buf_.data(), buf_.size());
-    // zlib reports corrupt data as -1, which MRPT passes on as a huge size_t.
-    if (n > buf_.size())
+    const long long got = in_.read(buf_.data(), buf_.size());
+    if (got < 0)
       throw BadLine(where(line_no_ + 1) +
                         "corrupt compressed data (not a valid gzip stream) after " +
                         std::to_string(bytes_) + " decompressed bytes",
                     line_no_);
+    const size_t n = static_cast<size_t>(got);
     pos_ = 0;
     end_ = n;
     bytes_ += n;
@@ -155,7 +158,7 @@ class LineSource {
   uint64_t file_size_ = 0;
   bool gzipped_ = false;
   std::optional<uint32_t> trailer_size_;
-  mrpt::io::CFileGZInputStream in_;
+  GzInput in_;
   std::vector<char> buf_;
   size_t pos_ = 0, end_ = 0;
   bool eof_ = false;
