@@ -73,7 +73,10 @@ struct CarmenImportStats {
   uint64_t params = 0;                    ///< PARAM lines
   std::map<std::string, uint64_t> scans;  ///< scans written, by message type
   uint64_t empty_scans = 0;               ///< laser messages with 0 readings (not written)
-  uint64_t odometry = 0;                  ///< CObservationOdometry written
+  /** Readings that are nan, inf or negative (kept as invalid beams), the
+   *  scans that have any, and the line of the first. */
+  uint64_t bad_readings = 0, scans_with_bad_readings = 0, first_bad_reading_line = 0;
+  uint64_t odometry = 0;                                  ///< CObservationOdometry written
   CarmenOdometry odometry_source = CarmenOdometry::None;  ///< the source used (never Auto)
   std::map<std::string, uint64_t> unknown;                ///< unknown message types, skipped
   /** Known messages left out by the chosen odometry source: ODOM lines when
