@@ -25,6 +25,7 @@ struct EvalArgs {
   double max_dt = 0.02;
   bool interpolate = false;
   double max_gap = 0.5;
+  bool by_index = false;
   bool no_align = false;
   std::vector<double> rpe_dist{1, 5};
   double rel_dist = 1;
@@ -103,7 +104,7 @@ std::string toJson(const EvalArgs& a, const EvalResult& r) {
   else
     fileJson(j, a.ref, r.ref);
   j.key("association").beginObject();
-  j.key("method").value(a.interpolate ? "interpolate" : "nearest");
+  j.key("method").value(a.by_index ? "index" : a.interpolate ? "interpolate" : "nearest");
   j.key("max_dt_s").value(a.max_dt);
   if (a.interpolate) j.key("max_gap_s").value(a.max_gap);
   j.key("matched").value(static_cast<uint64_t>(r.assoc ? r.assoc->size() : 0));
@@ -171,9 +172,13 @@ std::string toText(const EvalArgs& a, const EvalResult& r) {
   if (!r.ref.empty()) line("reference   " + a.ref + ": " + spanText(r.ref));
   if (r.assoc) {
     char buf[256];
-    std::snprintf(buf, sizeof buf, "matched     %zu of %zu estimated poses (%s, max-dt %g s)",
-                  r.assoc->size(), r.assoc->est_total,
-                  a.interpolate ? "interpolated reference" : "nearest timestamps", a.max_dt);
+    if (a.by_index)
+      std::snprintf(buf, sizeof buf, "matched     %zu of %zu estimated poses (by index)",
+                    r.assoc->size(), r.assoc->est_total);
+    else
+      std::snprintf(buf, sizeof buf, "matched     %zu of %zu estimated poses (%s, max-dt %g s)",
+                    r.assoc->size(), r.assoc->est_total,
+                    a.interpolate ? "interpolated reference" : "nearest timestamps", a.max_dt);
     std::string s = buf;
     if (a.interpolate) s += ", " + std::to_string(r.assoc->interpolated) + " interpolated";
     line(s);
@@ -252,6 +257,8 @@ void checkArgs(const EvalArgs& a) {
     throw InputError("--est is required (the trajectory to evaluate)");
   if (!a.est.empty() && a.ref.empty() && a.relations.empty() && a.make_relations.empty())
     throw InputError("nothing to compare with: give --ref, --relations or both");
+  if (a.by_index && a.ref.empty())
+    throw InputError("--by-index pairs the estimate with a --ref trajectory: give --ref");
   if (!a.relations.empty() && !a.make_relations.empty())
     throw InputError("--relations and --make-relations exclude each other");
 }
@@ -321,6 +328,7 @@ void runEval(const EvalArgs& a, const GlobalOptions& g) {
   ap.max_dt = a.max_dt;
   ap.interpolate = a.interpolate;
   ap.max_gap = a.max_gap;
+  ap.by_index = a.by_index;
 
   EvalResult r;
   std::vector<slam::Relation> rels;
@@ -406,6 +414,10 @@ void addEvalCommand(CLI::App& app, const GlobalOptions& g) {
   cmd->add_option("--max-gap", a->max_gap,
                   "With --interpolate: longest reference gap (s) to interpolate across")
       ->capture_default_str();
+  cmd->add_flag("--by-index", a->by_index,
+                "Pair the k-th estimated pose with the k-th reference pose, timestamps ignored "
+                "(both files must have as many poses): for logs whose timestamps repeat")
+      ->excludes("--interpolate");
   cmd->add_flag("--no-align", a->no_align,
                 "ATE without the SE(2) alignment (when both are in the same frame already)");
   cmd->add_option("--rpe-dist", a->rpe_dist,

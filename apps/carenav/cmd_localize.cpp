@@ -92,7 +92,12 @@ void addLocalizeCommand(CLI::App& app, const GlobalOptions& g) {
       std::cerr << "[localize] " << r.scans << " scans, " << r.updates << " updates in "
                 << r.seconds << " s; ";
       if (r.convergence_time)
-        std::cerr << "converged after " << *r.convergence_time << " s";
+        std::cerr << "converged after " << *r.convergence_time << " s (" << *r.convergence_updates
+                  << " updates)";
+      else if (r.convergence_updates)
+        std::cerr << "converged after " << *r.convergence_updates << " updates ("
+                  << *r.convergence_scans
+                  << " scans; no time: scans before it repeat the timestamp of the scan before)";
       else
         std::cerr << "never converged";
       std::cerr << "; " << r.events.size() << " loss/recovery events, " << r.injections

@@ -120,7 +120,13 @@ void addSlamCommand(CLI::App& app, const GlobalOptions& g) {
       if (o.method == "icp-graph")
         std::cerr << ", " << s.keyframes << " keyframes, " << s.loop_closures
                   << " loop closures of " << s.loop_candidates << " tried";
-      std::cerr << "\n[slam] final pose " << r.final_pose.asString() << "\n";
+      std::cerr << "\n";
+      if (s.restamped)
+        std::cerr << "[slam] warning: " << s.restamped << " of " << r.steps
+                  << " scans did not advance in time (the log repeats its timestamps); MRPT's "
+                     "builder got them 1 ms after the scan before, trajectory.tum keeps the "
+                     "log's times (evaluate with carenav eval --by-index)\n";
+      std::cerr << "[slam] final pose " << r.final_pose.asString() << "\n";
       for (const auto& f : r.outputs) std::cerr << "[slam] wrote " << f << "\n";
     }
     if (r.rawlog_error)

@@ -158,6 +158,16 @@ TEST(Cli, ProfileCheckAndShow) {
   EXPECT_NE(show.out.find("v_max = 0.25"), std::string::npos) << show.out;
   EXPECT_NE(show.out.find("safe_distance = 0.325"), std::string::npos);
   EXPECT_NE(show.out.find("[sensor.kinect]"), std::string::npos);
+
+  // Sections a command reads with their defaults when the profile lacks them
+  // are listed too, with every key.
+  const RunResult defaults = carenav({"profile", "show", kSrc + "/ini/defaults.ini"});
+  ASSERT_EQ(defaults.code, 0) << defaults.err;
+  for (const std::string key :
+       {"[icp]\n", "[rbpf]\n", "[localization]\n", "[navigation]\n",
+        "\nmaxIterations = ", "\nparticles = ", "\nparticles_min = ", "\nglobal_particles = "})
+    EXPECT_NE(defaults.out.find(key), std::string::npos) << key << defaults.out;
+  EXPECT_NE(defaults.out.find("not in the profile"), std::string::npos);
 }
 
 TEST(Cli, ProfileErrorsExitTwoNamingTheKey) {

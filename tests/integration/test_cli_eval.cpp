@@ -291,3 +291,44 @@ TEST(CliEval, MalformedFilesExit2NamingFileAndLine) {
   EXPECT_EQ(o.code, 2) << o.err;
   EXPECT_NE(o.err.find("cannot create the output directory"), std::string::npos) << o.err;
 }
+
+// Trajectories whose timestamps all repeat (one pose per scan of a log
+// stamped with one time): by time only one pair matches, and the message
+// says why; --by-index pairs the k-th poses.
+TEST(CliEval, RepeatedTimestampsNeedByIndexAndItPairsByOrder) {
+  const fs::path d = dirFor("by_index");
+  std::string ref_text, est_text, short_text;
+  for (int k = 0; k < 50; ++k) {
+    const double x = 0.2 * k, y = 0.1 * k;
+    ref_text += "5 " + std::to_string(x) + " " + std::to_string(y) + " 0 0 0 0 1\n";
+    // The estimate: the same path shifted by 1 m (alignment removes it), every
+    // pose 1 cm off in y, alternately up and down (alignment cannot remove it).
+    est_text += "5 " + std::to_string(x + 1) + " " + std::to_string(y + (k % 2 ? 0.01 : -0.01)) +
+                " 0 0 0 0 1\n";
+    if (k < 40) short_text += "5 0 0 0 0 0 0 1\n";
+  }
+  const std::string ref = writeFile(d / "ref.tum", ref_text);
+  const std::string est = writeFile(d / "est.tum", est_text);
+  const std::string shorter = writeFile(d / "short.tum", short_text);
+  RunResult r = carenav({"eval", "--est", est, "--ref", ref});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("do not tell the poses apart"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("49 repeat the time before"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--by-index"), std::string::npos) << r.err;
+
+  r = carenav({"eval", "--est", est, "--ref", ref, "--by-index", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(jsonNumber(r.out, "matched"), 50u);
+  std::smatch m;  // the first rmse: the ATE's translation
+  ASSERT_TRUE(std::regex_search(r.out, m, std::regex("\"rmse\": ([-0-9.eE+]+)"))) << r.out;
+  const double rmse = std::stod(m[1]);
+  EXPECT_LT(rmse, 0.0105);
+  EXPECT_GT(rmse, 0.005);
+  r = carenav({"eval", "--est", est, "--ref", ref, "--by-index"});
+  EXPECT_NE(r.out.find("(by index)"), std::string::npos) << r.out;
+
+  r = carenav({"eval", "--est", shorter, "--ref", ref, "--by-index"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("as many estimated as reference poses"), std::string::npos) << r.err;
+  EXPECT_EQ(carenav({"eval", "--est", est, "--ref", ref, "--by-index", "--interpolate"}).code, 2);
+}

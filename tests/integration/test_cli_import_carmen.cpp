@@ -212,3 +212,40 @@ TEST(CliImportCarmen, BadInputsExitTwoNamingFileAndLine) {
   EXPECT_NE(r.err.find("empty file"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(scratch() / "e.rawlog"));
 }
+
+// Real logs with lines stamped before the log's clock started (negative
+// ipc_timestamp): those lines are skipped and counted, the rest converted,
+// whatever the odometry source.
+TEST(CliImportCarmen, NegativeTimestampsAreSkippedAndCounted) {
+  for (const std::string name : {"acapulco", "infinite-corridor", "freiburg-campus"}) {
+    const std::string log = kTestData + "/carmen/" + name + "-corrected.log.gz";
+    ASSERT_TRUE(fs::exists(log)) << log;
+    auto count = [&](const std::string& type, const std::string& cond) {
+      return std::stoull(shell("zcat " + quote(log) + " | awk '$1==\"" + type + "\" && " + cond +
+                               "{n++} END{print n+0}'")
+                             .out);
+    };
+    const uint64_t lasers = count("FLASER", "1"), neg_lasers = count("FLASER", "$(NF-2)<0");
+    const uint64_t neg_odom = count("ODOM", "$(NF-2)<0");
+    ASSERT_GT(neg_lasers + neg_odom, 0u) << name;
+    for (const std::string odo : {"auto", "none", "odom"}) {
+      SCOPED_TRACE(name + " --odometry " + odo);
+      const auto out = scratch() / (name + "-" + odo + ".rawlog");
+      const RunResult r =
+          carenav({"import", "carmen", log, "--out", out.string(), "--odometry", odo, "--json"});
+      ASSERT_EQ(r.code, 0) << r.err;
+      EXPECT_EQ(jsonNumber(r.out, "scans"), lasers - neg_lasers);
+      EXPECT_GE(jsonNumber(r.out, "scans"), lasers * 99 / 100);  // most of the log
+      std::smatch m;
+      ASSERT_TRUE(std::regex_search(r.out, m, std::regex("\"negative_time\": \\{([^}]*)\\}")));
+      const std::string neg = m[1];
+      if (neg_odom)
+        EXPECT_NE(neg.find("\"ODOM\": " + std::to_string(neg_odom)), std::string::npos) << neg;
+      if (neg_lasers)
+        EXPECT_NE(neg.find("\"FLASER\": " + std::to_string(neg_lasers)), std::string::npos) << neg;
+      EXPECT_NE(r.err.find("with a negative ipc_timestamp"), std::string::npos) << r.err;
+      const RunResult info = carenav({"rawlog", "info", "--json", out.string()});
+      ASSERT_EQ(info.code, 0) << info.err;
+    }
+  }
+}

@@ -297,3 +297,51 @@ TEST(CliLocalize, AddPlaceHereRecordsWhereTheRawlogEnds) {
   EXPECT_NE(r.err.find("cut.rawlog"), std::string::npos) << r.err;
   EXPECT_EQ(slurp(dir / "map.places.yaml"), before);
 }
+
+// A log whose scans all carry one timestamp: convergence is reported by
+// filter updates and scans, not as a time of 0 s.
+TEST(CliLocalize, RepeatedTimestampsReportConvergenceByUpdates) {
+  const auto dir = scratch() / "loc_repeated_times";
+  fs::create_directories(dir);
+  const std::string intel = kTestData + "/carmen/intel-corrected.log.gz";
+  const std::string real = (dir / "real.log").string(), same = (dir / "same.log").string();
+  ASSERT_EQ(shell("zcat " + quote(intel) + " | head -n 1500 > " + quote(real)).code, 0);
+  ASSERT_EQ(shell("awk '$1==\"FLASER\"||$1==\"ODOM\"{$(NF-2)=7} {print}' " + quote(real) + " > " +
+                  quote(same))
+                .code,
+            0);
+  for (const std::string name : {"real", "same"})
+    ASSERT_EQ(carenav({"-q", "import", "carmen", (dir / (name + ".log")).string(), "--odometry",
+                       "laser", "--out", (dir / (name + ".rawlog")).string()})
+                  .code,
+              0);
+  const RunResult m =
+      carenav({"-q", "slam", "--profile", kSrc + "/ini/defaults.ini", "--method", "icp", "--rawlog",
+               (dir / "real.rawlog").string(), "--out", (dir / "map").string()});
+  ASSERT_EQ(m.code, 0) << m.err;
+  auto run = [&](const std::string& name) {
+    const RunResult r = carenav({"localize", "--profile", kSrc + "/ini/defaults.ini", "--map",
+                                 (dir / "map" / "map.gridmap.gz").string(), "--rawlog",
+                                 (dir / (name + ".rawlog")).string(), "--init", "0,0,0,0.3,0.3,10",
+                                 "--out", (dir / ("loc_" + name)).string()});
+    EXPECT_EQ(r.code, 0) << r.err;
+    return std::make_pair(r.err, slurp(dir / ("loc_" + name) / "summary.json"));
+  };
+  const auto [real_err, real_sum] = run("real");
+  const auto [same_err, same_sum] = run("same");
+  ASSERT_NE(real_sum.find("\"converged\": true"), std::string::npos) << real_sum;
+  EXPECT_GT(jsonReal(real_sum, "convergence_time").value_or(0), 0.0);
+  const auto updates = jsonReal(real_sum, "convergence_updates");
+  ASSERT_TRUE(updates.has_value()) << real_sum;
+  EXPECT_EQ(jsonReal(real_sum, "repeated_times").value_or(-1), 0.0);
+
+  EXPECT_NE(same_sum.find("\"converged\": true"), std::string::npos) << same_sum;
+  EXPECT_NE(same_sum.find("\"convergence_time\": null"), std::string::npos) << same_sum;
+  EXPECT_EQ(jsonReal(same_sum, "convergence_updates"), updates);  // same filter, same data
+  const double scans = jsonReal(same_sum, "scans").value_or(0);
+  EXPECT_EQ(jsonReal(same_sum, "repeated_times").value_or(0), scans - 1);
+  EXPECT_NE(
+      same_err.find("converged after " + std::to_string(static_cast<int>(*updates)) + " updates"),
+      std::string::npos)
+      << same_err;
+}

@@ -114,3 +114,59 @@ TEST(CliSlam, BadInputsExitTwoAndKeepWhatWasMapped) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("not an MRPT .simplemap"), std::string::npos) << r.err;
 }
+
+// A log whose timestamps all repeat (a log stamped in whole seconds or not at
+// all): `icp` advances by scan order and maps as it does with the log's real
+// times, says so, and the trajectory can be evaluated by index.
+TEST(CliSlam, IcpAdvancesByScanOrderWhenTimestampsRepeat) {
+  const fs::path dir = scratch() / "slam_equal_stamps";
+  fs::create_directories(dir);
+  const std::string intel = kTestData + "/carmen/intel-corrected.log.gz";
+  const std::string real = (dir / "real.log").string(), same = (dir / "same.log").string();
+  ASSERT_EQ(shell("zcat " + quote(intel) + " | head -n 3000 > " + quote(real)).code, 0);
+  ASSERT_EQ(shell("awk '$1==\"FLASER\"||$1==\"ODOM\"{$(NF-2)=7} {print}' " + quote(real) + " > " +
+                  quote(same))
+                .code,
+            0);
+  struct Run {
+    uint64_t steps = 0, inserted = 0, restamped = 0;
+    std::string err;
+  };
+  auto run = [&](const std::string& log, const std::string& name) {
+    Run r;
+    const std::string rawlog = (dir / (name + ".rawlog")).string();
+    const RunResult imp =
+        carenav({"-q", "import", "carmen", log, "--odometry", "laser", "--out", rawlog});
+    EXPECT_EQ(imp.code, 0) << imp.err;
+    const RunResult s = carenav({"slam", "--profile", kSrc + "/ini/defaults.ini", "--method", "icp",
+                                 "--rawlog", rawlog, "--out", (dir / name).string()});
+    EXPECT_EQ(s.code, 0) << s.err;
+    const std::string sum = slurp(dir / name / "summary.json");
+    r.steps = jsonNumber(sum, "steps");
+    r.inserted = jsonNumber(sum, "scans_inserted");
+    r.restamped = jsonNumber(sum, "scans_restamped");
+    EXPECT_NE(sum.find("\"complete\": true"), std::string::npos);
+    r.err = s.err;
+    return r;
+  };
+  const Run a = run(real, "real"), b = run(same, "same");
+  ASSERT_GT(a.steps, 100u);
+  EXPECT_EQ(b.steps, a.steps);
+  EXPECT_EQ(a.restamped, 0u);
+  EXPECT_EQ(b.restamped, b.steps - 1);
+  EXPECT_NE(b.err.find("did not advance in time"), std::string::npos) << b.err;
+  EXPECT_GT(a.inserted, a.steps / 2);
+  EXPECT_EQ(b.inserted, a.inserted);  // the same map, not a 2-scan one
+
+  // The trajectories: by time they cannot be paired (one repeated stamp),
+  // the message says why and names --by-index, which pairs them.
+  const std::string est = (dir / "same" / "trajectory.tum").string();
+  const std::string ref = (dir / "real" / "trajectory.tum").string();
+  RunResult e = carenav({"eval", "--est", est, "--ref", ref});
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.err.find("--by-index"), std::string::npos) << e.err;
+  e = carenav({"eval", "--est", est, "--ref", ref, "--by-index", "--json"});
+  ASSERT_EQ(e.code, 0) << e.err;
+  EXPECT_EQ(jsonNumber(e.out, "matched"), a.steps);
+  EXPECT_NE(e.out.find("\"method\": \"index\""), std::string::npos);
+}

@@ -377,6 +377,16 @@ std::string Profile::resolvedText() const {
   for (const auto& f : files_) os << " " << f;
   os << "\n";
   const auto& reg = ProfileSchemas::instance();
+  auto printSpecs = [&os](const SectionSchema& schema, const auto& entryOf) {
+    for (const auto& spec : schema.specs) {
+      const Entry* e = entryOf(spec.key);
+      std::string line = spec.key + " = " + (e ? e->value : spec.default_text);
+      if (line.size() < 34) line.resize(34, ' ');
+      os << line << " ; " << (spec.unit.empty() ? "" : "[" + spec.unit + "] ")
+         << (e ? "from " + e->origin.where() : std::string("default")) << ": " << spec.meaning
+         << "\n";
+    }
+  };
   for (const auto& [name, sec] : sections_) {
     os << "\n[" << name << "]\n";
     auto cands = reg.candidates(name);
@@ -398,14 +408,18 @@ std::string Profile::resolvedText() const {
       for (const auto& [k, e] : sec) os << k << " = " << e.value << "\n";
       continue;
     }
-    for (const auto& spec : schema->specs) {
-      const Entry* e = entryOf(spec.key);
-      std::string line = spec.key + " = " + (e ? e->value : spec.default_text);
-      if (line.size() < 34) line.resize(34, ' ');
-      os << line << " ; " << (spec.unit.empty() ? "" : "[" + spec.unit + "] ")
-         << (e ? "from " + e->origin.where() : std::string("default")) << ": " << spec.meaning
-         << "\n";
-    }
+    printSpecs(*schema, entryOf);
+  }
+  // Sections the commands read with their defaults when the profile does not
+  // have them ([icp], [rbpf], [localization], ...): listed too, so every
+  // parameter a command uses is shown. Families ("sensor.*") describe
+  // sections a profile adds, and have no defaults of their own.
+  for (const auto& schema : reg.all()) {
+    if (schema.name.find('*') != std::string::npos || sections_.count(schema.name)) continue;
+    if (!schema.variant_key.empty()) continue;
+    os << "\n[" << schema.name << "]\n; not in the profile: " << schema.description
+       << ", every key at its default\n";
+    printSpecs(schema, [](const std::string&) -> const Entry* { return nullptr; });
   }
   return os.str();
 }

@@ -4,8 +4,9 @@
 #include <carenav/io/carmen.h>
 #include <carenav/io/trajectory.h>
 
+#include "gz_input.h"
+
 #include <mrpt/core/Clock.h>
-#include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservationOdometry.h>
@@ -36,6 +37,13 @@ constexpr double kPi = M_PI;
 constexpr double kDefaultMaxRange = 80.0;    // m: CARMEN's readlog for old messages
 constexpr double kDefaultAccuracy = 0.01;    // m: idem
 constexpr size_t kMaxLineBytes = 64u << 20;  // far above any laser line; stops binary junk
+// Bounds of what a robot log can hold; a value beyond them is corrupt data
+// (1e300, a wrapped integer), refused with the line named.
+constexpr double kMaxCoordinate = 1e7;  // m: beyond 10 000 km (UTM coordinates are within it)
+constexpr double kMaxAngle = 1e6;       // rad: unwrapped odometry headings stay far below
+constexpr double kMaxSpeed = 1e3;       // m/s, rad/s, m/s^2
+constexpr double kMaxRangeBound = 1e6;  // m: laser maximum range, accuracy, mount offsets
+constexpr double kMaxTime = 1e10;       // s since 1970: year 2286
 
 /** One malformed line: the full message, "FILE:LINE: TYPE: what". */
 class BadLine : public std::runtime_error {
@@ -122,20 +130,22 @@ class LineSource {
 
   uint64_t lineNumber() const { return line_no_; }
   uint64_t fileSize() const { return file_size_; }
-  uint64_t filePosition() { return gzipped_ ? in_.getPosition() : bytes_; }
+  /** Bytes of the file read so far (compressed bytes for a .gz): comparable
+   *  with fileSize(), for progress. */
+  uint64_t filePosition() { return std::min(in_.filePosition(), file_size_); }
   bool gzipped() const { return gzipped_; }
 
  private:
   std::string where(uint64_t line) const { return path_ + ":" + std::to_string(line) + ": "; }
 
   bool fill() {
-    const size_t n = in_.Read(buf_.data(), buf_.size());
-    // zlib reports corrupt data as -1, which MRPT passes on as a huge size_t.
-    if (n > buf_.size())
+    const long long got = in_.read(buf_.data(), buf_.size());
+    if (got < 0)
       throw BadLine(where(line_no_ + 1) +
                         "corrupt compressed data (not a valid gzip stream) after " +
                         std::to_string(bytes_) + " decompressed bytes",
                     line_no_);
+    const size_t n = static_cast<size_t>(got);
     pos_ = 0;
     end_ = n;
     bytes_ += n;
@@ -155,7 +165,7 @@ class LineSource {
   uint64_t file_size_ = 0;
   bool gzipped_ = false;
   std::optional<uint32_t> trailer_size_;
-  mrpt::io::CFileGZInputStream in_;
+  GzInput in_;
   std::vector<char> buf_;
   size_t pos_ = 0, end_ = 0;
   bool eof_ = false;
@@ -195,6 +205,12 @@ std::string printable(std::string_view t) {
   for (auto& c : s)
     if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
   return s;
+}
+
+std::string fmtLimit(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
 }
 
 // ---------------------------------------------------------------------------
@@ -249,6 +265,26 @@ class Fields {
     return v;
   }
 
+  /** A finite number within +-limit (the unit names it in the message). */
+  double bounded(size_t i, const std::string& name, double limit, const char* unit) const {
+    const double v = real(i, name);
+    if (std::abs(v) > limit) {
+      const std::string u = *unit ? std::string(" ") + unit : std::string();
+      fail(name + " is " + printable(f_[i]) + u + ", beyond +-" + fmtLimit(limit) + u +
+           ": not a value a robot log holds (field " + std::to_string(i) + ")");
+    }
+    return v;
+  }
+  double coordinate(size_t i, const std::string& name) const {
+    return bounded(i, name, kMaxCoordinate, "m");
+  }
+  double angle(size_t i, const std::string& name) const {
+    return bounded(i, name, kMaxAngle, "rad");
+  }
+  double speed(size_t i, const std::string& name) const {
+    return bounded(i, name, kMaxSpeed, "per s");
+  }
+
   /** A non-negative integer count. */
   size_t count(size_t i, const std::string& name) const {
     const std::string_view s = f_[i];
@@ -264,11 +300,13 @@ class Fields {
   /** The ipc_timestamp, third field from the end: UNIX seconds. Plain
    *  decimals convert exactly to MRPT's 100 ns ticks; the double in `secs`
    *  is for the TUM file and the statistics. */
-  mrpt::Clock::time_point timestamp(double& secs) const {
+  /** Empty for a negative ipc_timestamp: real logs have a few (acapulco,
+   *  infinite-corridor, freiburg-campus of Radish), the caller skips the line. */
+  std::optional<mrpt::Clock::time_point> timestamp(double& secs) const {
     const size_t i = f_.size() - 3;
-    secs = real(i, "ipc_timestamp");
-    (void)real(f_.size() - 1, "logger_timestamp");  // the line must end as it should
-    if (secs < 0) fail("ipc_timestamp is negative: '" + printable(f_[i]) + "'");
+    secs = bounded(i, "ipc_timestamp", kMaxTime, "s");
+    (void)bounded(f_.size() - 1, "logger_timestamp", kMaxTime, "s");  // the line must end so
+    if (secs < 0) return std::nullopt;
     static const mrpt::Clock::time_point kUnixEpoch = mrpt::Clock::fromDouble(0);
     std::string_view s = f_[i];
     if (!s.empty() && s[0] == '+') s.remove_prefix(1);
@@ -416,6 +454,12 @@ std::string CarmenImportStats::toText() const {
   o << "scans:        " << totalScans();
   if (!scans.empty()) o << " (" << joinCounts(scans) << ")";
   o << "\n";
+  if (!negative_time.empty()) {
+    uint64_t n = 0;
+    for (const auto& [k, v] : negative_time) n += v;
+    o << "skipped:      " << n << " line(s) with a negative ipc_timestamp ("
+      << joinCounts(negative_time) << ")\n";
+  }
   o << "odometry:     " << odometry << " (source: " << toString(odometry_source) << ")\n";
   if (observations)
     o << "time span:    " << fmtTime(min_time) << " .. " << fmtTime(max_time) << " s ("
@@ -439,6 +483,8 @@ std::string CarmenImportStats::toJson() const {
   for (const auto& [k, v] : scans) j.key(k).value(v);
   j.endObject();
   j.key("empty_scans").value(empty_scans);
+  j.key("bad_readings").value(bad_readings);
+  j.key("scans_with_bad_readings").value(scans_with_bad_readings);
   j.key("odometry").value(odometry);
   j.key("odometry_source").value(toString(odometry_source));
   j.key("observations").value(observations);
@@ -450,6 +496,9 @@ std::string CarmenImportStats::toJson() const {
   j.key("scans_time_repeated").value(scans_time_repeated);
   j.key("unknown").beginObject();
   for (const auto& [k, v] : unknown) j.key(k).value(v);
+  j.endObject();
+  j.key("negative_time").beginObject();
+  for (const auto& [k, v] : negative_time) j.key(k).value(v);
   j.endObject();
   j.key("unused").beginObject();
   for (const auto& [k, v] : unused) j.key(k).value(v);
@@ -469,8 +518,16 @@ std::string CarmenImportStats::notesText() const {
   for (const auto& [k, v] : unused)
     s += "skipped " + std::to_string(v) + " " + k + " line" + (v == 1 ? "" : "s") +
          " (odometry source is '" + toString(odometry_source) + "'; --odometry odom uses them)\n";
+  for (const auto& [k, v] : negative_time)
+    s += "skipped " + std::to_string(v) + " " + k + " line" + (v == 1 ? "" : "s") +
+         " with a negative ipc_timestamp (a logger artefact; left out)\n";
   if (empty_scans)
     s += "skipped " + std::to_string(empty_scans) + " laser message(s) with no reading\n";
+  if (bad_readings)
+    s += "warning: " + std::to_string(bad_readings) + " reading(s) in " +
+         std::to_string(scans_with_bad_readings) +
+         " scan(s) are nan, inf or negative (first at line " +
+         std::to_string(first_bad_reading_line) + "): kept as invalid beams\n";
   if (scans_time_backwards)
     s += "note: " + std::to_string(scans_time_backwards) +
          " scan(s) have a timestamp earlier than the scan before (kept in file order; the TUM "
@@ -554,6 +611,7 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
   // Builds (and so checks) the scan whose readings are fields [first, first + n)
   // before anything of its line is written: a bad line adds nothing.
   mrpt::obs::CObservation2DRangeScan scan;
+  uint64_t pending_bad_readings = 0;  // of the scan built last
   auto buildScan = [&](const Fields& f, size_t first, size_t n, const ScanGeometry& g,
                        const CPose2D& mount, mrpt::Clock::time_point stamp) {
     const double aperture = n ? static_cast<double>(n - 1) * g.increment : 0;
@@ -568,12 +626,16 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
     scan.maxRange = static_cast<float>(max_range);
     scan.stdError = static_cast<float>(g.accuracy);
     scan.resizeScan(n);
+    uint64_t not_finite = 0;
     for (size_t i = 0; i < n; ++i) {
       const double r = f.anyNumber(first + i, "reading " + std::to_string(i));
+      if (!std::isfinite(r) || r < 0) ++not_finite;
       const bool valid = std::isfinite(r) && r > 0 && r < max_range;
-      scan.setScanRange(i, std::isfinite(r) && r > 0 ? static_cast<float>(r) : 0.f);
+      // Invalid readings are stored as the maximum range (1e300 fits no float).
+      scan.setScanRange(i, valid ? static_cast<float>(r) : static_cast<float>(max_range));
       scan.setScanRangeValidity(i, valid);
     }
+    pending_bad_readings = not_finite;
     // MRPT's beams are symmetric about the sensor's x axis: turn the sensor
     // to the middle of CARMEN's [start, start + aperture].
     scan.sensorPose = mrpt::poses::CPose3D(mount + CPose2D(0, 0, g.start + aperture / 2));
@@ -582,6 +644,11 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
     if (n == 0) {  // MRPT's scan code divides by the beam count
       ++st.empty_scans;
       return;
+    }
+    if (pending_bad_readings) {
+      st.bad_readings += pending_bad_readings;
+      ++st.scans_with_bad_readings;
+      if (!st.first_bad_reading_line) st.first_bad_reading_line = src.lineNumber();
     }
     writeObject(out, scan);
     ++st.scans[scan.sensorLabel];
@@ -619,7 +686,7 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
         f.need(3, "param_value");
         const std::string_view name = tok[1];
         auto number = [&](double& dst, bool positive) {
-          const double v = f.real(2, std::string(name));
+          const double v = f.bounded(2, std::string(name), kMaxRangeBound, "");
           if (positive && !(v > 0)) f.fail(std::string(name) + " must be > 0");
           dst = v;
         };
@@ -647,7 +714,12 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
                                        (poses ? "x y theta odom_x odom_y odom_theta, " : "") +
                                        "ipc_timestamp ipc_hostname logger_timestamp");
         double t = 0;
-        const auto stamp = f.timestamp(t);
+        const auto stamp_or = f.timestamp(t);
+        if (!stamp_or) {
+          ++st.negative_time[f.type()];
+          continue;
+        }
+        const auto stamp = *stamp_or;
         ScanGeometry g;
         g.increment = oldLaserIncrement(n, front  ? par.front_resolution
                                            : rear ? par.rear_resolution
@@ -660,9 +732,10 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
         buildScan(f, 2, n, g, mount, stamp);
         if (poses) {
           const size_t p = 2 + n;
-          const CPose2D laser(f.real(p, "x"), f.real(p + 1, "y"), f.real(p + 2, "theta"));
-          const CPose2D odo(f.real(p + 3, "odom_x"), f.real(p + 4, "odom_y"),
-                            f.real(p + 5, "odom_theta"));
+          const CPose2D laser(f.coordinate(p, "x"), f.coordinate(p + 1, "y"),
+                              f.angle(p + 2, "theta"));
+          const CPose2D odo(f.coordinate(p + 3, "odom_x"), f.coordinate(p + 4, "odom_y"),
+                            f.angle(p + 5, "odom_theta"));
           if (laser_odom) writeOdometry(odo, std::nullopt, stamp, t);
           if (front) {
             // CARMEN logs the front laser's pose; the robot is offset behind it.
@@ -681,11 +754,11 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
         f.need(9, "num_readings");
         ScanGeometry g;
         (void)f.real(1, "laser_type");
-        g.start = f.real(2, "start_angle");
-        const double fov = f.real(3, "field_of_view");
-        const double res = f.real(4, "angular_resolution");
-        const double maxr = f.real(5, "maximum_range");
-        const double acc = f.real(6, "accuracy");
+        g.start = f.angle(2, "start_angle");
+        const double fov = f.angle(3, "field_of_view");
+        const double res = f.angle(4, "angular_resolution");
+        const double maxr = f.bounded(5, "maximum_range", kMaxRangeBound, "m");
+        const double acc = f.bounded(6, "accuracy", kMaxRangeBound, "m");
         (void)f.real(7, "remission_mode");
         const size_t n = f.count(8, "num_readings");
         if (n > tok.size())
@@ -707,7 +780,12 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
         for (size_t k = 0; k < m; ++k)
           (void)f.anyNumber(10 + n + k, "remission " + std::to_string(k));
         double t = 0;
-        const auto stamp = f.timestamp(t);
+        const auto stamp_or = f.timestamp(t);
+        if (!stamp_or) {
+          ++st.negative_time[f.type()];
+          continue;
+        }
+        const auto stamp = *stamp_or;
         if (res > 0)
           g.increment = res;
         else if (fov > 0 && n > 1)
@@ -721,11 +799,11 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
         CPose2D mount;
         if (robot) {
           const size_t p = 10 + n + m;
-          const CPose2D laser(f.real(p, "laser_pose_x"), f.real(p + 1, "laser_pose_y"),
-                              f.real(p + 2, "laser_pose_theta"));
-          rob = CPose2D(f.real(p + 3, "robot_pose_x"), f.real(p + 4, "robot_pose_y"),
-                        f.real(p + 5, "robot_pose_theta"));
-          vel = {f.real(p + 6, "laser_tv"), f.real(p + 7, "laser_rv")};
+          const CPose2D laser(f.coordinate(p, "laser_pose_x"), f.coordinate(p + 1, "laser_pose_y"),
+                              f.angle(p + 2, "laser_pose_theta"));
+          rob = CPose2D(f.coordinate(p + 3, "robot_pose_x"), f.coordinate(p + 4, "robot_pose_y"),
+                        f.angle(p + 5, "robot_pose_theta"));
+          vel = {f.speed(p + 6, "laser_tv"), f.speed(p + 7, "laser_rv")};
           (void)f.real(p + 8, "forward_safety_dist");
           (void)f.real(p + 9, "side_safety_dist");
           (void)f.real(p + 10, "turn_axis");
@@ -742,13 +820,17 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
 
       if (type == "ODOM") {
         f.exact(10, "ODOM x y theta tv rv accel ipc_timestamp ipc_hostname logger_timestamp");
-        const CPose2D pose(f.real(1, "x"), f.real(2, "y"), f.real(3, "theta"));
-        const double tv = f.real(4, "tv"), rv = f.real(5, "rv");
-        (void)f.real(6, "accel");
+        const CPose2D pose(f.coordinate(1, "x"), f.coordinate(2, "y"), f.angle(3, "theta"));
+        const double tv = f.speed(4, "tv"), rv = f.speed(5, "rv");
+        (void)f.speed(6, "accel");
         double t = 0;
         const auto stamp = f.timestamp(t);
+        if (!stamp) {
+          ++st.negative_time["ODOM"];
+          continue;
+        }
         if (odom_lines)
-          writeOdometry(pose, std::make_pair(tv, rv), stamp, t);
+          writeOdometry(pose, std::make_pair(tv, rv), *stamp, t);
         else
           ++st.unused["ODOM"];
         continue;

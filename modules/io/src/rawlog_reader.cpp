@@ -2,7 +2,9 @@
 
 #include <carenav/common/crash_guard.h>
 
-#include <mrpt/io/CFileGZInputStream.h>
+#include "gz_input.h"
+
+#include <mrpt/io/CStream.h>
 #include <mrpt/maps/registerAllClasses.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/obs/CActionRobotMovement3D.h>
@@ -10,6 +12,7 @@
 #include <mrpt/obs/registerAllClasses.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <new>
@@ -24,29 +27,31 @@ using mrpt::obs::CSensoryFrame;
  *  so a clean end (no byte of a new object) is told from a truncated object. */
 class RawlogReader::CountingStream : public mrpt::io::CStream {
  public:
-  explicit CountingStream(const std::string& path) {
+  CountingStream(const std::string& path, uint64_t file_size) : file_size_(file_size) {
     std::string err;
     if (!gz_.open(path, err)) throw InputError(path + ": cannot open the rawlog: " + err);
   }
   size_t Read(void* buf, size_t n) override {
-    size_t r = gz_.Read(buf, n);
-    if (r > n) r = 0;  // zlib's error (-1) comes back as a huge size_t
+    const long long got = gz_.read(buf, n);
+    const size_t r = got < 0 ? 0 : static_cast<size_t>(got);  // corrupt data: no more bytes
     count_ += r;
     if (r < n) short_read_ = true;
     return r;
   }
   size_t Write(const void*, size_t) override { return 0; }
   uint64_t Seek(int64_t, TSeekOrigin) override { return count_; }
-  uint64_t getTotalBytesCount() const override { return gz_.getTotalBytesCount(); }
+  uint64_t getTotalBytesCount() const override { return file_size_; }
   uint64_t getPosition() const override { return count_; }
-  uint64_t filePosition() const { return gz_.getPosition(); }
+  /** In the file: compressed bytes for a .gz, comparable with its size. */
+  uint64_t filePosition() const { return std::min(gz_.filePosition(), file_size_); }
   uint64_t count() const { return count_; }
   /** True once a read got fewer bytes than asked: the data ran out. */
   bool shortRead() const { return short_read_; }
 
  private:
   bool short_read_ = false;
-  mrpt::io::CFileGZInputStream gz_;
+  uint64_t file_size_;
+  GzInput gz_;
   uint64_t count_ = 0;
 };
 
@@ -92,7 +97,7 @@ RawlogReader::RawlogReader(const std::string& path) : path_(path) {
     f.read(reinterpret_cast<char*>(magic), 2);
     gzipped_ = f.gcount() == 2 && magic[0] == 0x1f && magic[1] == 0x8b;
   }
-  stream_ = std::make_unique<CountingStream>(path);
+  stream_ = std::make_unique<CountingStream>(path, file_size_);
 }
 
 RawlogReader::~RawlogReader() = default;

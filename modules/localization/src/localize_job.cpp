@@ -102,6 +102,8 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
   const bool tty = o.progress && isatty(fileno(stderr));
   slam::ScanStep s;
   std::optional<double> t_first;
+  std::optional<double> t_prev;
+  size_t repeats_before_convergence = 0;
   while (true) {
     try {
       if (!stream.next(s)) break;
@@ -116,8 +118,15 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
       t = static_cast<double>(s.index);
     }
     if (!t_first) t_first = t;
+    if (t_prev && t == *t_prev) ++r.repeated_times;
+    t_prev = t;
     const StepResult sr = loc.step(s.odometry.value_or(mrpt::poses::CPose2D()), s.scan, t);
     ++r.scans;
+    if (!r.convergence_updates && loc.convergenceTime()) {
+      r.convergence_updates = loc.updates();
+      r.convergence_scans = r.scans;
+      repeats_before_convergence = r.repeated_times;
+    }
     r.track.push_back({t, sr.pose.x(), sr.pose.y(), sr.pose.phi()});
     r.covs.push_back(sr.cov);
     if (sr.updated)
@@ -146,7 +155,8 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
     q.t_start -= *t_first;
     if (q.t_end) *q.t_end -= *t_first;
   }
-  if (loc.convergenceTime()) r.convergence_time = *loc.convergenceTime() - *t_first;
+  if (loc.convergenceTime() && repeats_before_convergence == 0)
+    r.convergence_time = *loc.convergenceTime() - *t_first;
   r.converged_at_end = loc.converged();
   r.final_spread = loc.spread();
   if (o.out_dir.empty()) return r;
@@ -199,14 +209,21 @@ std::string LocalizeJobResult::summaryJson(const LocalizeJobOptions& o) const {
   j.key("scans").value(static_cast<uint64_t>(scans));
   j.key("updates").value(static_cast<uint64_t>(updates));
   j.key("time_source").value(index_times ? "scan index" : "rawlog timestamps");
-  j.key("converged");
-  if (convergence_time)
-    j.value(true);
-  else
-    j.value(false);
+  j.key("repeated_times").value(static_cast<uint64_t>(repeated_times));
+  j.key("converged").value(convergence_updates.has_value());
   j.key("convergence_time");
   if (convergence_time)
     j.value(*convergence_time);
+  else
+    j.null();
+  j.key("convergence_updates");
+  if (convergence_updates)
+    j.value(static_cast<uint64_t>(*convergence_updates));
+  else
+    j.null();
+  j.key("convergence_scans");
+  if (convergence_scans)
+    j.value(static_cast<uint64_t>(*convergence_scans));
   else
     j.null();
   j.key("converged_at_end").value(converged_at_end);

@@ -112,11 +112,36 @@ std::optional<TimedPose2D> poseAt(const Trajectory2D& traj, double t, const Asso
   return std::nullopt;
 }
 
+size_t repeatedStamps(const Trajectory2D& t) {
+  size_t n = 0;
+  for (size_t i = 1; i < t.size(); ++i)
+    if (t[i].t == t[i - 1].t) ++n;
+  return n;
+}
+
 Association associate(const Trajectory2D& est, const Trajectory2D& ref,
                       const AssociationParams& p) {
   Association a;
   a.est_total = est.size();
   a.ref_total = ref.size();
+  if (p.by_index) {
+    // The k-th estimated pose against the k-th reference pose: for logs whose
+    // timestamps do not tell poses apart (one pose per scan in both files).
+    if (est.size() != ref.size())
+      throw InputError(
+          "by-index association needs as many estimated as reference poses: "
+          "estimate " +
+          span(est) + "; reference " + span(ref));
+    if (est.size() < 2)
+      throw InputError("by-index association needs at least 2 poses; estimate: " + span(est));
+    a.est = est;
+    a.ref = ref;
+    for (size_t i = 0; i < est.size(); ++i) {
+      a.ref[i].t = est[i].t;
+      a.est_index.push_back(i);
+    }
+    return a;
+  }
   if (!est.empty() && !ref.empty()) {
     for (size_t i = 0; i < est.size(); ++i) {
       const double t = est[i].t;
@@ -143,12 +168,22 @@ Association associate(const Trajectory2D& est, const Trajectory2D& ref,
       a.est_index.push_back(i);
     }
   }
-  if (a.size() < 2)
+  if (a.size() < 2) {
+    const size_t rep_est = repeatedStamps(est), rep_ref = repeatedStamps(ref);
+    if (rep_est || rep_ref)
+      throw InputError(
+          "only " + std::to_string(a.size()) + " of " + std::to_string(est.size()) +
+          " estimated poses matched a reference pose by time (" + ruleText(p) +
+          "): the timestamps do not tell the poses apart (estimate: " + span(est) + ", " +
+          std::to_string(rep_est) + " repeat the time before; reference: " + span(ref) + ", " +
+          std::to_string(rep_ref) +
+          " repeat the time before); associate the k-th poses of both files with --by-index");
     throw InputError("the timestamps of the estimate and the reference do not overlap: " +
                      std::to_string(a.size()) + " of " + std::to_string(est.size()) +
                      " estimated poses matched a reference pose (" + ruleText(p) +
                      "), at least 2 are needed; estimate: " + span(est) +
                      "; reference: " + span(ref));
+  }
   return a;
 }
 

@@ -8,7 +8,9 @@
 #include <mrpt/poses/CPosePDFGaussian.h>
 #include <mrpt/slam/CMetricMapBuilderICP.h>
 
+#include <chrono>
 #include <cmath>
+#include <optional>
 
 namespace carenav::slam {
 
@@ -72,18 +74,33 @@ class IcpMapper : public Mapper {
   }
 
   void process(const ScanStep& step) override {
+    // MRPT's pose extrapolator divides odometry increments by the time
+    // between readings: a scan whose timestamp does not advance (logs stamped
+    // in whole seconds, or not at all) gives it infinite velocities and the
+    // builder stops growing the map. Such scans reach the builder stamped
+    // kRestampStep after the one before; the trajectory keeps the log's
+    // times. Scans that do advance keep theirs.
+    auto scan = clipScan(step.scan, cfg_.slam.scan_range_max);
+    mrpt::Clock::time_point stamp = scan->timestamp;
+    if (last_stamp_ && !(stamp > *last_stamp_)) {
+      stamp = *last_stamp_ + kRestampStep;
+      if (scan == step.scan) scan = std::make_shared<mrpt::obs::CObservation2DRangeScan>(*scan);
+      scan->timestamp = stamp;
+      ++stats_.restamped;
+    }
+    last_stamp_ = stamp;
     // Odometry as an absolute reading (the builder differentiates it), then
     // the scan: MRPT's observation-only path. Without odometry the builder
     // runs ICP on every scan from the last pose (MRPT's laser-only mode).
     if (cfg_.slam.use_odometry && step.odometry) {
       odometry_ = odometry_ + *step.odometry;
       auto odo = mrpt::obs::CObservationOdometry::Create();
-      odo->timestamp = step.scan->timestamp;
+      odo->timestamp = stamp;
       odo->odometry = odometry_;
       builder_.processObservation(odo);
     }
     const unsigned before = builder_.getCurrentlyBuiltMapSize();
-    builder_.processObservation(clipScan(step.scan, cfg_.slam.scan_range_max));
+    builder_.processObservation(scan);
     if (builder_.getCurrentlyBuiltMapSize() > before) ++stats_.inserted;
     ++stats_.scans;
     const CPose2D p = pose();
@@ -122,8 +139,12 @@ class IcpMapper : public Mapper {
   MapperStats stats() const override { return stats_; }
 
  private:
+  /** A time step no laser scans at (1 kHz): only its sign matters to the
+   *  builder, whose extrapolation spans the 0 s from odometry to scan. */
+  static constexpr std::chrono::milliseconds kRestampStep{1};
   MapperConfig cfg_;
   mutable mrpt::slam::CMetricMapBuilderICP builder_;
+  std::optional<mrpt::Clock::time_point> last_stamp_;
   io::Trajectory2D traj_;
   CPose2D offset_;    // start pose: the builder's frame in the map frame
   CPose2D odometry_;  // accumulated motion prior, fed as odometry readings

@@ -360,6 +360,26 @@ TEST(Carmen, MalformedLineStopsButKeepsWhatCameBefore) {
        "span more than 360 deg"},
       {"param", "PARAM robot_front_laser_max lots 1 h 1\n", "PARAM",
        "robot_front_laser_max is not a number"},
+      // Finite but absurd numbers (corrupt data): refused with the field named.
+      {"hugex", flaser(readings(180, 2), 180, "1e300 0 0", "0 0 0", "11.0"), "FLASER",
+       "x is 1e300 m, beyond +-1e+07 m"},
+      {"hugeodomtheta", flaser(readings(180, 2), 180, "0 0 0", "0 0 -1e300", "11.0"), "FLASER",
+       "odom_theta is -1e300 rad"},
+      {"hugetime", flaser(readings(180, 2), 180, "0 0 0", "0 0 0", "1e300"), "FLASER",
+       "ipc_timestamp is 1e300 s, beyond +-1e+10 s"},
+      {"longtime", flaser(readings(180, 2), 180, "0 0 0", "0 0 0", "999999999999.5"), "FLASER",
+       "ipc_timestamp is 999999999999.5 s"},
+      {"hugeodom", "ODOM 1e300 2 3 0 0 0 11.0 h 11.0\n", "ODOM", "x is 1e300 m"},
+      {"hugetv", "ODOM 1 2 3 1e300 0 0 11.0 h 11.0\n", "ODOM", "tv is 1e300"},
+      {"hugemaxrange", "RAWLASER1 0 -1 0.04 0.01 1e300 0.01 0 2 1 1 0 11.0 h 11.0\n", "RAWLASER1",
+       "maximum_range is 1e300 m"},
+      {"hugestart", "RAWLASER1 0 1e300 0.04 0.01 8 0.01 0 2 1 1 0 11.0 h 11.0\n", "RAWLASER1",
+       "start_angle is 1e300 rad"},
+      {"hugerobot",
+       "ROBOTLASER1 0 -1 0.04 0.01 8 0.01 0 2 1 1 0 0 0 0 1e300 0 0 0 0 0 0 0 11.0 h 11.0\n",
+       "ROBOTLASER1", "robot_pose_x is 1e300 m"},
+      {"hugeparam", "PARAM robot_front_laser_max 1e300 1 h 1\n", "PARAM",
+       "robot_front_laser_max is 1e300"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.name);
@@ -382,6 +402,46 @@ TEST(Carmen, MalformedLineStopsButKeepsWhatCameBefore) {
       EXPECT_FALSE(fs::exists(o.output + ".tmp"));
     }
   }
+}
+
+TEST(Carmen, NonFiniteReadingsAreInvalidBeamsCountedWithAWarning) {
+  // nan, inf and negative readings: the scan is kept, those beams are
+  // invalid, and the import says how many and where the first was. A 1e300
+  // reading is beyond the maximum range: an ordinary invalid beam.
+  std::string bad = "nan inf -1 1e300 " + readings(176, 2);
+  const std::string text = flaser(readings(180, 2), 180, "0 0 0", "0 0 0", "10.0") +
+                           flaser(bad, 180, "0 0 0", "0 0 0", "10.1") +
+                           flaser("NaN " + readings(179, 2), 180, "0 0 0", "0 0 0", "10.2");
+  const auto in = writeText("nanranges.log", text);
+  const auto st = import(in, "nanranges");
+  EXPECT_EQ(st.totalScans(), 3u);
+  EXPECT_EQ(st.bad_readings, 4u);
+  EXPECT_EQ(st.scans_with_bad_readings, 2u);
+  EXPECT_EQ(st.first_bad_reading_line, 2u);
+  EXPECT_NE(st.notesText().find("warning: 4 reading(s) in 2 scan(s) are nan, inf or negative "
+                                "(first at line 2)"),
+            std::string::npos)
+      << st.notesText();
+  EXPECT_NE(st.toJson().find("\"bad_readings\": 4"), std::string::npos);
+  const auto obs = readBack((scratch() / "nanranges.rawlog").string());
+  size_t scans = 0;
+  for (const auto& o : obs) {
+    const auto s = std::dynamic_pointer_cast<CObservation2DRangeScan>(o);
+    if (!s) continue;
+    ++scans;
+    for (size_t i = 0; i < s->getScanSize(); ++i) {
+      EXPECT_TRUE(std::isfinite(s->getScanRange(i))) << i;
+      EXPECT_LE(s->getScanRange(i), s->maxRange);
+    }
+    if (scans == 2)
+      for (size_t i = 0; i < 4; ++i) EXPECT_FALSE(s->getScanRangeValidity(i)) << i;
+  }
+  EXPECT_EQ(scans, 3u);
+  // A clean log has no warning.
+  const auto clean = import(
+      writeText("clean.log", flaser(readings(180, 2), 180, "0 0 0", "0 0 0", "10.0")), "clean");
+  EXPECT_EQ(clean.bad_readings, 0u);
+  EXPECT_EQ(clean.notesText().find("warning"), std::string::npos);
 }
 
 TEST(Carmen, BadFirstLineWritesNothing) {

@@ -1,3 +1,4 @@
+#include <carenav/io/carmen.h>
 #include <carenav/io/rawlog_info.h>
 #include <carenav/io/rawlog_reader.h>
 
@@ -264,4 +265,35 @@ TEST(RawlogReader, StreamsInConstantMemory) {
   while (reader.next(e)) {
   }
   EXPECT_TRUE(first.expired());
+}
+
+TEST(RawlogReader, FilePositionOfAGzipRawlogIsInCompressedBytes) {
+  // Progress compares filePosition() with the file's size: for a .gz both
+  // must count compressed bytes, or a quarter of the log already reads 100 %.
+  CarmenImportOptions o;
+  o.input = std::string(CARENAV_TEST_DATA) + "/carmen/intel-corrected.log.gz";
+  o.output = (scratch() / "intel_progress.rawlog.gz").string();
+  o.write_tum = false;
+  o.compression = 6;
+  importCarmen(o);
+  RawlogReader reader(o.output);
+  ASSERT_TRUE(reader.gzipped());
+  const double size = static_cast<double>(reader.fileSize());
+  std::vector<double> frac;
+  RawlogEntry e;
+  uint64_t last = 0;
+  while (reader.next(e)) {
+    const uint64_t pos = reader.filePosition();
+    EXPECT_LE(pos, reader.fileSize());
+    EXPECT_GE(pos, last);  // never goes back
+    last = pos;
+    frac.push_back(pos / size);
+  }
+  ASSERT_GT(frac.size(), 1000u);
+  // The uncompressed stream is several times the file: a quarter of the
+  // entries is far from the end of the file, and the last entry at it.
+  EXPECT_GT(static_cast<double>(reader.streamOffset()), 2 * size);
+  EXPECT_LT(frac[frac.size() / 4], 0.5);
+  EXPECT_GT(frac[frac.size() / 4], 0.05);
+  EXPECT_GT(frac.back(), 0.95);
 }

@@ -73,12 +73,18 @@ struct CarmenImportStats {
   uint64_t params = 0;                    ///< PARAM lines
   std::map<std::string, uint64_t> scans;  ///< scans written, by message type
   uint64_t empty_scans = 0;               ///< laser messages with 0 readings (not written)
-  uint64_t odometry = 0;                  ///< CObservationOdometry written
+  /** Readings that are nan, inf or negative (kept as invalid beams), the
+   *  scans that have any, and the line of the first. */
+  uint64_t bad_readings = 0, scans_with_bad_readings = 0, first_bad_reading_line = 0;
+  uint64_t odometry = 0;                                  ///< CObservationOdometry written
   CarmenOdometry odometry_source = CarmenOdometry::None;  ///< the source used (never Auto)
   std::map<std::string, uint64_t> unknown;                ///< unknown message types, skipped
   /** Known messages left out by the chosen odometry source: ODOM lines when
    *  it is Laser or None. */
   std::map<std::string, uint64_t> unused;
+  /** Lines skipped for a negative ipc_timestamp, by message type (real
+   *  logs have a few; the rest of the log is converted). */
+  std::map<std::string, uint64_t> negative_time;
   uint64_t observations = 0;  ///< objects in the rawlog
   /** Timestamps of the written observations, UNIX seconds, in file order
    *  (first/last) and extremes (min/max); 0 when nothing was written. */
@@ -133,7 +139,9 @@ std::string defaultTumPath(const std::string& rawlog_path);
  *  laser_tv/laser_rv). Written before the scan of the same message.
  *
  *  Timestamps: the ipc_timestamp field, exactly to 100 ns when written as a
- *  plain decimal (no rounding through a double), as UNIX seconds.
+ *  plain decimal (no rounding through a double), as UNIX seconds. A line
+ *  with a negative ipc_timestamp (a logger artefact of some real logs) is
+ *  checked like any other, then skipped and counted in `negative_time`.
  *
  *  TUM: the robot pose of each FLASER (x y theta, less the front laser
  *  offset) and ROBOTLASERk (robot_pose) message at its timestamp, sorted by

@@ -58,7 +58,15 @@ struct LocalizeJobResult {
   std::vector<LocalizationEvent> events;
   std::vector<RotateRequest> rotate_requests;
   bool rotate_enabled = false;
-  std::optional<double> convergence_time;  ///< s since the first scan
+  /** s since the first scan; empty when it never converged, or when scans
+   *  up to convergence repeat the timestamp of the scan before (a log stamped
+   *  in whole seconds or not at all): the time is not measurable then, the
+   *  update and scan counts below are. */
+  std::optional<double> convergence_time;
+  /** Filter updates and scans until the spread fell below converged_spread
+   *  (empty: never converged). */
+  std::optional<size_t> convergence_updates, convergence_scans;
+  size_t repeated_times = 0;  ///< scans whose timestamp repeats the one before
   bool converged_at_end = false;
   double final_spread = 0;                  ///< m, particle spread after the last scan
   double seconds = 0;                       ///< wall time (map loading excluded)

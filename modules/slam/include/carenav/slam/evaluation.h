@@ -28,6 +28,11 @@ struct AssociationParams {
   double max_dt = 0.02;      ///< s, largest time difference of a nearest match
   bool interpolate = false;  ///< interpolate the reference between neighbours
   double max_gap = 0.5;      ///< s, longest reference gap to interpolate across
+  /** Pair the k-th estimated pose with the k-th reference pose, times
+   *  ignored (both must have the same number of poses): for logs whose
+   *  timestamps repeat, e.g. one pose per scan of a log stamped in whole
+   *  seconds or not at all. */
+  bool by_index = false;
 };
 
 /** Matched pairs: est[k] and ref[k] describe the same instant (est's time). */
