@@ -283,6 +283,7 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
   bridge->excludes(su);
   bridge->excludes(sc);
   cmd->callback([a, &g] {
+    if (!a->out.empty()) prepareOutputFolder(a->out);
     auto report = [a, &g](const std::vector<navigation::RunMetrics>& runs) {
       if (a->json) {
         std::cout << "[\n";
