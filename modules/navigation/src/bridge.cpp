@@ -404,9 +404,9 @@ RunMetrics runBridge(const BridgeOptions& o) {
     if (!alive) {
       const std::string part = sock.pendingPartial();
       error = InputError(
-          where +
-          (sock.resetByPeer() ? ": the connection was reset (the robot is gone without 'bye')"
-                              : ": the robot closed the connection without 'bye'") +
+          where + ": the robot closed the connection without 'bye'" +
+          (sock.resetByPeer() ? std::string(" (reset: nothing more can be sent to it)")
+                              : std::string()) +
           (part.empty() ? std::string()
                         : " (its last line was cut: '" + printableText(part, 60) + "')"));
       break;
