@@ -34,6 +34,7 @@ void addDemoCommand(CLI::App& app, const GlobalOptions& g) {
   cmd->add_option("--rawlog", a->rawlog, "Rawlog to use instead of MRPT's SENA dataset");
   cmd->add_option("--out", a->out, "Output folder")->capture_default_str();
   cmd->callback([a, &g] {
+    prepareOutputFolder(a->out);
     std::string path = a->rawlog;
     if (path.empty()) {
       path = mrptDatasetsDir() + "/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";

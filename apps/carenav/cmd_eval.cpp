@@ -324,6 +324,7 @@ void writeOutputs(const EvalArgs& a, EvalResult& r) {
 
 void runEval(const EvalArgs& a, const GlobalOptions& g) {
   checkArgs(a);
+  if (!a.out.empty()) prepareOutputFolder(a.out);
   slam::AssociationParams ap;
   ap.max_dt = a.max_dt;
   ap.interpolate = a.interpolate;

@@ -54,6 +54,8 @@ void addImportCarmen(CLI::App& import_cmd, const GlobalOptions& g) {
       "  carenav rawlog info intel.rawlog\n"
       "See docs/import.md.");
   cmd->callback([a, &g] {
+    prepareOutputFile(a->opt.output);
+    if (!a->opt.tum.empty()) prepareOutputFile(a->opt.tum, "--tum");
     const bool quiet = g.quiet || a->quiet;
     a->opt.odometry = io::parseCarmenOdometry(a->odometry);
     a->opt.write_tum = !a->no_tum;

@@ -33,6 +33,7 @@ void addImportRosMap(CLI::App& import_cmd, const GlobalOptions&) {
     std::error_code ec;
     if (fs::is_directory(out, ec))
       out = (fs::path(out) / (fs::path(a->yaml).stem().string() + ".gridmap.gz")).string();
+    prepareOutputFile(out);
     io::checkMapOutputPath(out, /*gridmap_only=*/true);
     const auto grid = io::readRosMap(a->yaml);
     io::saveGridMap(grid, out);

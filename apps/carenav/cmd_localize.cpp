@@ -70,6 +70,7 @@ void addLocalizeCommand(CLI::App& app, const GlobalOptions& g) {
                   "Cell size (m) of the grid built from a .simplemap (default 0.05)");
   cmd->add_option("--set", a->sets, "Override a profile value: section.key=value (repeatable)");
   cmd->callback([a, &g] {
+    prepareOutputFolder(a->out);
     Profile p = Profile::load(a->profile);
     p.applyOverrides(a->sets);
     p.validate();

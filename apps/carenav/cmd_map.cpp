@@ -104,6 +104,7 @@ void addMapCommand(CLI::App& app, const GlobalOptions&) {
       ->check(CLI::Range(1, 64));
   convert->add_flag("--crop", ca->crop, "PNG output: crop to the known cells plus 1 m");
   convert->callback([ca] {
+    prepareOutputFile(ca->out, "out");
     io::checkMapOutputPath(ca->out);
     const auto grid = io::loadGridMap(ca->in, loadOptions(ca->load));
     const std::string out_lower = [&] {

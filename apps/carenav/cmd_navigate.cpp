@@ -45,6 +45,7 @@ struct NavigateArgs {
   std::string world, start, intent, bridge, map;
   std::optional<double> speed, duration;
   double connect_timeout = 10;
+  double silence_timeout = 5;
 };
 
 std::atomic<bool> g_stop{false};
@@ -277,12 +278,17 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
   live->add_option("--connect-timeout", a->connect_timeout,
                    "Seconds to keep trying to reach the bridge (default 10)")
       ->check(CLI::Range(0.0, 3600.0));
+  live->add_option("--silence-timeout", a->silence_timeout,
+                   "--bridge: seconds without any line from the robot before the run ends "
+                   "with 'stop error', exit 2 (default 5; 0: never)")
+      ->check(CLI::Range(0.0, 3600.0));
   live->add_option("--map", a->map,
                    "Static map for goal navigation with --bridge (any map carenav reads)");
   bridge->excludes(world);
   bridge->excludes(su);
   bridge->excludes(sc);
   cmd->callback([a, &g] {
+    if (!a->out.empty()) prepareOutputFolder(a->out);
     auto report = [a, &g](const std::vector<navigation::RunMetrics>& runs) {
       if (a->json) {
         std::cout << "[\n";
@@ -328,6 +334,7 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
       b.control_rate = a->rate;
       b.duration = a->duration.value_or(0);
       b.connect_timeout = a->connect_timeout;
+      b.silence_timeout = a->silence_timeout;
       b.out_dir = a->out;
       b.stop = &g_stop;
       b.progress = !g.quiet;

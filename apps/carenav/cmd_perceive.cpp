@@ -51,6 +51,7 @@ void addPerceiveCommand(CLI::App& app, const GlobalOptions& g) {
   cmd->add_option("--max-frames", a->max_frames, "Stop after this many frames (0: all)");
   cmd->add_option("--set", a->sets, "Override a profile value: section.key=value (repeatable)");
   cmd->callback([a, &g] {
+    prepareOutputFolder(a->out);
     Profile p = Profile::load(a->profile);
     p.applyOverrides(a->sets);
     p.validate();

@@ -448,6 +448,7 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
   render->add_option("--out", rd->out, "PNG file to write")->required();
   render->add_flag("--crop", rd->crop, "Crop to the known cells plus 1 m");
   render->callback([rd, &g] {
+    prepareOutputFile(rd->out);
     const PlacesFile f = places::readPlacesFile(rd->f.placesPath());
     const auto grid = rd->f.grid();
     io::RenderOptions ro;

@@ -45,6 +45,7 @@ void addSimulateCommand(CLI::App& app, const GlobalOptions& g) {
                   "for --script its last row's time)");
   cmd->add_option("--set", a->sets, "Override a profile value: section.key=value (repeatable)");
   cmd->callback([a, &g] {
+    prepareOutputFile(a->out);
     if (a->path.empty() == a->script.empty())
       throw InputError("give exactly one of --path and --script");
     if (a->duration < 0) throw InputError("--duration must not be negative");

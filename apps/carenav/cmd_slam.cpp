@@ -80,6 +80,7 @@ void addSlamCommand(CLI::App& app, const GlobalOptions& g) {
                   "Pose x,y,deg where the new rawlog starts in the resumed map (default: the "
                   "last pose of that map)");
   cmd->callback([a, &g] {
+    prepareOutputFolder(a->out);
     slam::SlamJobOptions o;
     o.rawlog = a->rawlog;
     o.out_dir = a->out;

@@ -40,6 +40,16 @@ struct ImportRegistrar {
 #define CARENAV_IMPORT(fn) \
   static const ::carenav::app::ImportRegistrar carenav_import_registrar_##fn(fn)
 
+/** An output folder given by the user (`--out DIR`), made ready before any
+ *  work: created with its parents and tried with a file. Throws InputError
+ *  (exit 2) naming the option, the folder and why ("/x is a file, not a
+ *  folder", "cannot create it in /proc: No such file or directory", "cannot
+ *  write in it: Permission denied"). */
+void prepareOutputFolder(const std::string& dir, const std::string& option = "--out");
+/** An output file given by the user: its folder must exist and take a file,
+ *  and the path must not be a folder. Throws InputError like the above. */
+void prepareOutputFile(const std::string& path, const std::string& option = "--out");
+
 /** Where MRPT's datasets are: $CARENAV_MRPT_DATASETS, else the build-time path. */
 std::string mrptDatasetsDir();
 

@@ -9,7 +9,11 @@
 #include <carenav/sim/sim_params.h>
 #include <carenav/slam/slam_params.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -32,6 +36,77 @@ std::vector<CommandAdder>& importRegistry() {
   static std::vector<CommandAdder> r;
   return r;
 }
+namespace {
+namespace fs = std::filesystem;
+
+std::string errnoText(int e) { return std::error_code(e, std::generic_category()).message(); }
+
+/** Creates and removes a file in `dir`; the reason when it cannot. */
+std::string cannotWriteIn(const fs::path& dir) {
+  const fs::path probe = dir / (".carenav-write-test-" + std::to_string(::getpid()));
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
+  if (fd < 0) return errnoText(errno);
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return {};
+}
+
+/** The nearest existing folder at or above `p`, or the path component that
+ *  exists and is not a folder (then `blocked` is set). */
+fs::path nearestExisting(const fs::path& p, bool& blocked) {
+  blocked = false;
+  fs::path cur = p;
+  std::error_code ec;
+  while (!cur.empty()) {
+    const auto st = fs::status(cur, ec);
+    if (!ec && fs::exists(st)) {
+      blocked = !fs::is_directory(st);
+      return cur;
+    }
+    if (cur == cur.root_path() || !cur.has_parent_path() || cur.parent_path() == cur) break;
+    cur = cur.parent_path();
+  }
+  return fs::path(".");
+}
+}  // namespace
+
+void prepareOutputFolder(const std::string& dir, const std::string& option) {
+  const std::string head = option + " " + dir + ": ";
+  if (dir.empty()) throw InputError(option + ": empty folder name");
+  const fs::path p = fs::absolute(fs::path(dir)).lexically_normal();
+  bool blocked = false;
+  const fs::path have = nearestExisting(p, blocked);
+  if (blocked)
+    throw InputError(head + (have == p ? std::string("is a file, not a folder")
+                                       : have.string() + " is a file, not a folder"));
+  std::error_code ec;
+  fs::create_directories(p, ec);
+  if (ec || !fs::is_directory(p))
+    throw InputError(head + "cannot create the folder in " + have.string() + ": " +
+                     (ec ? ec.message() : std::string("not created")));
+  if (const std::string why = cannotWriteIn(p); !why.empty())
+    throw InputError(head + "cannot write in the folder: " + why);
+}
+
+void prepareOutputFile(const std::string& path, const std::string& option) {
+  const std::string head = option + " " + path + ": ";
+  if (path.empty()) throw InputError(option + ": empty file name");
+  const fs::path p = fs::absolute(fs::path(path)).lexically_normal();
+  std::error_code ec;
+  if (fs::is_directory(p, ec)) throw InputError(head + "is a folder, expected a file name");
+  const fs::path parent = p.parent_path();
+  const auto st = fs::status(parent, ec);
+  if (ec || !fs::exists(st)) {
+    bool blocked = false;
+    const fs::path have = nearestExisting(parent, blocked);
+    throw InputError(head + "the folder " + parent.string() + " does not exist" +
+                     (blocked ? " (" + have.string() + " is a file)" : std::string()));
+  }
+  if (!fs::is_directory(st)) throw InputError(head + parent.string() + " is a file, not a folder");
+  if (const std::string why = cannotWriteIn(parent); !why.empty())
+    throw InputError(head + "cannot write in the folder " + parent.string() + ": " + why);
+}
+
 std::string mrptDatasetsDir() {
   if (const char* e = std::getenv("CARENAV_MRPT_DATASETS"); e && *e) return e;
   return CARENAV_DEFAULT_DATASETS;

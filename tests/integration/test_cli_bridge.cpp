@@ -25,7 +25,7 @@ struct FakeRobot {
   double x = 0, yaw = 0, v = 0, t = 0;
   double wall_x = 1.4;
   double max_front = 0;  ///< farthest x of the footprint's front (0.3 m ahead)
-  std::vector<double> cmds_v;
+  std::vector<double> cmds_v, cmds_t;
   std::vector<std::string> received;
 
   std::string odom() const {
@@ -59,6 +59,7 @@ struct FakeRobot {
       if (in >> k && k == "cmd" && in >> tt >> vv >> ww) {
         v = vv;
         cmds_v.push_back(vv);
+        cmds_t.push_back(tt);
       }
     }
   }
@@ -213,4 +214,239 @@ TEST(CliBridge, UnreachableRobotExits2) {
        "--plugin", "user-intent-dwa", "--connect-timeout", "0.5"});
   EXPECT_EQ(res.code, 2);
   EXPECT_NE(res.err.find("cannot connect"), std::string::npos) << res.err;
+}
+
+// ------------------------------------------------------------ every way a connection ends
+
+namespace {
+
+/** Waits for carenav's next command (it sends one per control cycle);
+ *  false when none came within `ms` (or the connection ended). */
+bool awaitCommand(LineSocket& s, FakeRobot& r, int ms = 5000) {
+  const size_t before = r.cmds_v.size();
+  for (int waited = 0; waited < ms && r.cmds_v.size() == before; waited += 20) {
+    std::vector<std::string> lines;
+    const bool alive = s.readLines(lines, 20);
+    for (const auto& l : lines) {
+      r.received.push_back(l);
+      std::istringstream in(l);
+      std::string k;
+      double tt, vv, ww;
+      if (in >> k && k == "cmd" && in >> tt >> vv >> ww) {
+        r.v = vv;
+        r.cmds_v.push_back(vv);
+        r.cmds_t.push_back(tt);
+      }
+    }
+    if (!alive) break;
+  }
+  return r.cmds_v.size() > before;
+}
+
+/** Reads whatever carenav still sends until it closes (at most `ms`). */
+void drain(LineSocket& s, FakeRobot& r, int ms = 10000) {
+  for (int waited = 0; waited < ms; waited += 20) {
+    std::vector<std::string> lines;
+    const bool alive = s.readLines(lines, 20);
+    for (const auto& l : lines) {
+      r.received.push_back(l);
+      std::istringstream in(l);
+      std::string k;
+      double tt, vv, ww;
+      if (in >> k && k == "cmd" && in >> tt >> vv >> ww) {
+        r.v = vv;
+        r.cmds_v.push_back(vv);
+        r.cmds_t.push_back(tt);
+      }
+    }
+    if (!alive) return;
+  }
+}
+
+/** Drives in lock-step with carenav (one message batch per command) for
+ *  `cycles` cycles: odometry, the user pushing at 0.2 m/s, and scans of a
+ *  free way ahead while `scans(k)`. */
+template <class F>
+void lockStep(LineSocket& s, FakeRobot& r, int cycles, F scans) {
+  for (int k = 0; k < cycles; ++k) {
+    if (scans(k)) s.sendLine(r.scan());
+    s.sendLine(r.odom());
+    s.sendLine("intent " + std::to_string(r.t) + " 0.2 0");
+    if (!awaitCommand(s, r)) return;
+    r.move(0.1);
+  }
+}
+
+}  // namespace
+
+TEST(CliBridge, HalfClosedConnectionGetsZeroVelocityAndStop) {
+  TcpListener listener("127.0.0.1", 0);
+  const auto out = scratch() / "bridge_halfclose";
+  fs::remove_all(out);
+  auto done = startCarenav(listener.port(), {"--out", out.string()});
+  LineSocket s = acceptWithin(listener, 30);
+  ASSERT_TRUE(s.open());
+  FakeRobot r;
+  r.wall_x = 20;
+  lockStep(s, r, 30, [](int) { return true; });
+  ASSERT_GT(r.cmds_v.size(), 20u);
+  EXPECT_GT(r.cmds_v.back(), 0.05) << "the user was being followed";
+  s.shutdownWrite();  // the robot sends no more but still listens
+  drain(s, r);
+  const RunResult res = done.get();
+  EXPECT_EQ(res.code, 2) << res.err;
+  EXPECT_NE(res.err.find("closed the connection without 'bye'"), std::string::npos) << res.err;
+  ASSERT_GE(r.received.size(), 2u);
+  EXPECT_EQ(r.received.back(), "stop error");
+  EXPECT_NEAR(r.cmds_v.back(), 0.0, 1e-9) << "the last command stands the robot still";
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+}
+
+TEST(CliBridge, ResetConnectionExits2AndKeepsTheOutputs) {
+  TcpListener listener("127.0.0.1", 0);
+  const auto out = scratch() / "bridge_reset";
+  fs::remove_all(out);
+  auto done = startCarenav(listener.port(), {"--out", out.string()});
+  LineSocket s = acceptWithin(listener, 30);
+  ASSERT_TRUE(s.open());
+  FakeRobot r;
+  r.wall_x = 20;
+  lockStep(s, r, 10, [](int) { return true; });
+  s.sendLine(r.odom());
+  s.abort();  // RST: the robot's side is gone at once
+  const RunResult res = done.get();
+  EXPECT_EQ(res.code, 2) << res.err;
+  EXPECT_TRUE(res.err.find("reset") != std::string::npos ||
+              res.err.find("without 'bye'") != std::string::npos)
+      << res.err;
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+}
+
+TEST(CliBridge, SilentRobotIsStoppedThenTheRunEnds) {
+  TcpListener listener("127.0.0.1", 0);
+  auto done = startCarenav(listener.port(), {"--silence-timeout", "1.5"});
+  LineSocket s = acceptWithin(listener, 30);
+  ASSERT_TRUE(s.open());
+  FakeRobot r;
+  r.wall_x = 20;
+  lockStep(s, r, 20, [](int) { return true; });
+  const size_t before = r.cmds_v.size();
+  drain(s, r, 30000);  // connected, reading, silent
+  const RunResult res = done.get();
+  EXPECT_EQ(res.code, 2) << res.err;
+  EXPECT_NE(res.err.find("sent nothing for 1.5 s"), std::string::npos) << res.err;
+  ASSERT_GE(r.received.size(), 2u);
+  EXPECT_EQ(r.received.back(), "stop error");
+  ASSERT_GT(r.cmds_v.size(), before + 5) << "commands went on while it was silent";
+  EXPECT_NEAR(r.cmds_v.back(), 0.0, 1e-9);
+  // Cycles 0.1 s apart at least 0.09 s: within the 1.5 s, at most 6 (0.5 s
+  // sensor_timeout / 0.09 s) moved on the last scan; the rest stood still.
+  size_t moving = 0;
+  for (size_t i = before; i < r.cmds_v.size(); ++i) moving += r.cmds_v[i] > 1e-6;
+  EXPECT_LE(moving, 6u);
+}
+
+TEST(CliBridge, StaleScansStopTheRobotWithinSensorTimeoutPlusOnePeriod) {
+  // Lock-step at carenav's rate (10 Hz, sensor_timeout 0.5 s): after the
+  // last scan, commands computed on it (those whose robot time is at least
+  // the scan's) may move for at most 0.5 s: 6 cycles (cycles are at least
+  // 0.9 periods apart). The robot obeys each for one period: the stale-data
+  // bound is sensor_timeout + one period (docs/navigate.md).
+  TcpListener listener("127.0.0.1", 0);
+  auto done = startCarenav(listener.port(), {});
+  LineSocket s = acceptWithin(listener, 30);
+  ASSERT_TRUE(s.open());
+  FakeRobot r;
+  r.wall_x = 20;
+  const int last_scan = 30;
+  double t_last = 0;
+  lockStep(s, r, 80, [&](int k) {
+    if (k == last_scan) t_last = r.t;
+    return k <= last_scan;
+  });
+  s.sendLine("bye");
+  drain(s, r);
+  const RunResult res = done.get();
+  ASSERT_EQ(res.code, 0) << res.err;
+  size_t before = 0, moving_after = 0, after = 0;
+  for (size_t i = 0; i < r.cmds_v.size(); ++i) {
+    if (r.cmds_t[i] < t_last - 1e-6) {
+      before += r.cmds_v[i] > 0.05;
+      continue;
+    }
+    ++after;
+    moving_after += r.cmds_v[i] > 1e-6;
+  }
+  EXPECT_GT(before, 10u) << "with fresh scans the robot follows its user";
+  EXPECT_GT(after, 30u);
+  EXPECT_GE(moving_after, 1u) << "a fresh scan is used at once";
+  EXPECT_LE(moving_after, 6u) << "moving commands on a scan older than sensor_timeout";
+  EXPECT_NEAR(r.cmds_v.back(), 0.0, 1e-9);
+}
+
+TEST(CliBridge, HugeScanLinesAreUsedAndDoNotStallTheLoop) {
+  // 100,000-beam scans (about 400 kB a line) with a wall 0.3 m ahead of the
+  // laser (0.15 m ahead of the footprint, safe_distance 0.2 m): they are reduced to the profile's
+  // 1081 beams (the nearest return of each share), so the wall is seen and the user's push is
+  // refused, and carenav answers every batch with a command (lock-step).
+  TcpListener listener("127.0.0.1", 0);
+  auto done = startCarenav(listener.port(), {});
+  LineSocket s = acceptWithin(listener, 30);
+  ASSERT_TRUE(s.open());
+  FakeRobot r;
+  const int n = 100000;
+  auto hugeScan = [&] {
+    std::ostringstream o;
+    o << "scan " << r.t << " laser " << n;
+    for (int i = 0; i < n; ++i) {
+      const double a = -135.0 * M_PI / 180 + i * (270.0 * M_PI / 180) / (n - 1);
+      const double c = std::cos(a);
+      const double d = c > 1e-3 ? 0.3 / c : 0.0;
+      o << " " << (d > 0 && d < 30 ? d : 0.0);
+    }
+    return o.str();
+  };
+  int answered = 0;
+  for (int k = 0; k < 15; ++k) {
+    s.sendLine(hugeScan());
+    s.sendLine(r.odom());
+    s.sendLine("intent " + std::to_string(r.t) + " 0.3 0");
+    answered += awaitCommand(s, r, 20000);
+    r.t += 0.1;
+  }
+  s.sendLine("bye");
+  drain(s, r);
+  const RunResult res = done.get();
+  ASSERT_EQ(res.code, 0) << res.err;
+  EXPECT_EQ(answered, 15);
+  ASSERT_FALSE(r.cmds_v.empty());
+  size_t moving = 0;
+  for (double v : r.cmds_v) moving += v > 1e-6;
+  EXPECT_EQ(moving, 0u) << "the wall 0.15 m ahead of the footprint must hold the robot";
+}
+
+TEST(CliBridge, ImplausibleOdometryAndRawBytesAreRefusedPrintably) {
+  for (const std::string bad :
+       {std::string("odom 1 1e300 0 0 0 0"), std::string("odom 1 \x1b[2J\x07 0 0 0 0"),
+        std::string("odo\0m 1 2 3", 11)}) {
+    TcpListener listener("127.0.0.1", 0);
+    auto done = startCarenav(listener.port(), {});
+    LineSocket s = acceptWithin(listener, 30);
+    ASSERT_TRUE(s.open());
+    FakeRobot r;
+    s.sendLine(r.odom());
+    s.sendLine(bad);
+    drain(s, r);
+    const RunResult res = done.get();
+    EXPECT_EQ(res.code, 2) << res.err;
+    EXPECT_NE(res.err.find("line 2"), std::string::npos) << res.err;
+    for (char c : res.err)
+      if (c != '\n') EXPECT_GE(static_cast<unsigned char>(c), 0x20) << res.err;
+    EXPECT_TRUE(res.err.find("beyond") != std::string::npos ||
+                res.err.find("\\x1b[2J\\x07") != std::string::npos ||
+                res.err.find("odo\\x00m") != std::string::npos)
+        << res.err;
+    ASSERT_FALSE(r.received.empty());
+    EXPECT_EQ(r.received.back(), "stop error");
+  }
 }

@@ -49,12 +49,22 @@ double niceLength(double target) {
 
 }  // namespace
 
-int RenderGeometry::px(double x) const {
-  return static_cast<int>(std::floor((x - x_min) * pixels_per_metre));
+namespace {
+/** A pixel coordinate, clamped to +-2^24 (far outside any picture, so the
+ *  drawing code clips it; the arithmetic on it cannot overflow). NaN gives
+ *  the far negative edge: nothing is drawn there. */
+int pixel(double v) {
+  constexpr double kFar = 16777216.0;
+  const double f = std::floor(v);
+  if (!(f > -kFar)) return -static_cast<int>(kFar);
+  if (f > kFar) return static_cast<int>(kFar);
+  return static_cast<int>(f);
 }
-int RenderGeometry::py(double y) const {
-  return static_cast<int>(std::floor((y_max - y) * pixels_per_metre));
-}
+bool finitePoint(const mrpt::math::TPoint2D& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
+}  // namespace
+
+int RenderGeometry::px(double x) const { return pixel((x - x_min) * pixels_per_metre); }
+int RenderGeometry::py(double y) const { return pixel((y_max - y) * pixels_per_metre); }
 
 mrpt::img::CImage renderGridMap(const COccupancyGridMap2D& map, const RenderOptions& o,
                                 RenderGeometry* geometry) {
@@ -76,7 +86,10 @@ mrpt::img::CImage renderGridMap(const COccupancyGridMap2D& map, const RenderOpti
     }
   }
   const auto& raw = map.getRawMap();
-  auto cellShade = [&](int cx, int cy) { return shade[static_cast<UCell>(raw[cx + cy * sx])]; };
+  auto cellAt = [&](int cx, int cy) {
+    return raw[static_cast<size_t>(cx) + static_cast<size_t>(cy) * static_cast<size_t>(sx)];
+  };
+  auto cellShade = [&](int cx, int cy) { return shade[static_cast<UCell>(cellAt(cx, cy))]; };
 
   // Cells shown: all, or the known ones plus a margin.
   int cx0 = 0, cx1 = sx, cy0 = 0, cy1 = sy;
@@ -85,7 +98,7 @@ mrpt::img::CImage renderGridMap(const COccupancyGridMap2D& map, const RenderOpti
     const OccupancyThresholds& t = o.thresholds;
     for (int cy = 0; cy < sy; ++cy)
       for (int cx = 0; cx < sx; ++cx)
-        if (classifyCell(COccupancyGridMap2D::l2p(raw[cx + cy * sx]), t) != CellClass::Unknown) {
+        if (classifyCell(COccupancyGridMap2D::l2p(cellAt(cx, cy)), t) != CellClass::Unknown) {
           ax0 = std::min(ax0, cx);
           ax1 = std::max(ax1, cx);
           ay0 = std::min(ay0, cy);
@@ -131,7 +144,12 @@ mrpt::img::CImage renderGridMap(const COccupancyGridMap2D& map, const RenderOpti
     }
   }
 
-  for (const Overlay& ov : o.overlays) {
+  for (const Overlay& given : o.overlays) {
+    // Points that are not numbers have no place on the picture.
+    Overlay ov = given;
+    ov.points.erase(std::remove_if(ov.points.begin(), ov.points.end(),
+                                   [](const auto& p) { return !finitePoint(p); }),
+                    ov.points.end());
     if (ov.points.empty()) continue;
     const TColor c = toColor(ov.colour);
     const int th = std::max(1, ov.thickness);

@@ -23,6 +23,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <map>
@@ -41,7 +42,8 @@ double number(const std::string& s, const char* what, bool allow_nonfinite = fal
   const double d = std::strtod(s.c_str(), &end);
   if (s.empty() || end != s.c_str() + s.size() || errno == ERANGE ||
       (!allow_nonfinite && !std::isfinite(d)))
-    throw std::invalid_argument(std::string(what) + " '" + s + "' is not a finite number");
+    throw std::invalid_argument(std::string(what) + " '" + printableText(s, 40) +
+                                "' is not a finite number");
   return d;
 }
 
@@ -49,6 +51,17 @@ std::string fmt(double v, int prec = 3) {
   char b[48];
   std::snprintf(b, sizeof b, "%.*f", prec, v);
   return b;
+}
+
+/** A finite number within +-limit (`unit` for the message): odometry of
+ *  1e300 m is refused here, naming the bridge line, instead of overflowing
+ *  the picture and the path length downstream. */
+double bounded(const std::string& s, const char* what, double limit, const char* unit) {
+  const double d = number(s, what);
+  if (std::abs(d) > limit)
+    throw std::invalid_argument(std::string(what) + " '" + printableText(s, 40) + "' is beyond +-" +
+                                fmt(limit, 0) + " " + unit + " (not a plausible value)");
+  return d;
 }
 
 }  // namespace
@@ -68,18 +81,23 @@ std::optional<BridgeMessage> parseBridgeLine(const std::string& line) {
   if (k == "odom") {
     need(7, "odom T X Y YAW V W");
     m.kind = BridgeMessage::Kind::Odom;
-    m.t = number(tok[1], "time");
-    m.pose = {number(tok[2], "x"), number(tok[3], "y"), number(tok[4], "yaw")};
-    m.vel = {number(tok[5], "v"), number(tok[6], "w")};
+    m.t = bounded(tok[1], "time", kBridgeMaxTime, "s");
+    m.pose = {bounded(tok[2], "x", kBridgeMaxCoordinate, "m"),
+              bounded(tok[3], "y", kBridgeMaxCoordinate, "m"),
+              bounded(tok[4], "yaw", kBridgeMaxYaw, "rad")};
+    m.vel = {bounded(tok[5], "v", kBridgeMaxSpeed, "m/s"),
+             bounded(tok[6], "w", kBridgeMaxSpeed, "rad/s")};
   } else if (k == "scan") {
     if (tok.size() < 4)
       throw std::invalid_argument("'scan' too short, expected 'scan T LABEL N R1 .. RN'");
     m.kind = BridgeMessage::Kind::Scan;
-    m.t = number(tok[1], "time");
+    m.t = bounded(tok[1], "time", kBridgeMaxTime, "s");
     m.label = tok[2];
+    if (m.label.size() > 64) throw std::invalid_argument("scan label longer than 64 bytes");
     const double n = number(tok[3], "N");
     if (n < 1 || n > 100000 || n != std::floor(n))
-      throw std::invalid_argument("N '" + tok[3] + "' is not a count of ranges (1..100000)");
+      throw std::invalid_argument("N '" + printableText(tok[3], 40) +
+                                  "' is not a count of ranges (1..100000)");
     const size_t count = static_cast<size_t>(n);
     if (tok.size() - 4 != count)
       throw std::invalid_argument("scan says " + std::to_string(count) + " ranges, has " +
@@ -88,19 +106,21 @@ std::optional<BridgeMessage> parseBridgeLine(const std::string& line) {
     m.ranges.reserve(count);
     for (size_t i = 0; i < count; ++i) {
       const double r = number(tok[4 + i], "range", true);
-      if (r < 0) throw std::invalid_argument("range '" + tok[4 + i] + "' is negative");
+      if (r < 0)
+        throw std::invalid_argument("range '" + printableText(tok[4 + i], 40) + "' is negative");
       m.ranges.push_back(static_cast<float>(r));
     }
   } else if (k == "intent") {
     need(4, "intent T V W");
     m.kind = BridgeMessage::Kind::Intent;
-    m.t = number(tok[1], "time");
-    m.vel = {number(tok[2], "v"), number(tok[3], "w")};
+    m.t = bounded(tok[1], "time", kBridgeMaxTime, "s");
+    m.vel = {bounded(tok[2], "v", kBridgeMaxSpeed, "m/s"),
+             bounded(tok[3], "w", kBridgeMaxSpeed, "rad/s")};
   } else if (k == "bye") {
     need(1, "bye");
     m.kind = BridgeMessage::Kind::Bye;
   } else {
-    throw std::invalid_argument("unknown message '" + k.substr(0, 40) +
+    throw std::invalid_argument("unknown message '" + printableText(k, 40) +
                                 "' (expected odom, scan, intent or bye)");
   }
   return m;
@@ -108,6 +128,20 @@ std::optional<BridgeMessage> parseBridgeLine(const std::string& line) {
 
 std::string formatCommand(double t, const Twist& c) {
   return "cmd " + fmt(t) + " " + fmt(c.v, 4) + " " + fmt(c.w, 4);
+}
+
+std::vector<float> reduceRanges(const std::vector<float>& ranges, size_t n,
+                                const std::function<bool(float)>& valid) {
+  if (n == 0 || ranges.size() <= n) return ranges;
+  std::vector<float> out(n, 0.0f);
+  for (size_t b = 0; b < n; ++b) {
+    const size_t i0 = b * ranges.size() / n, i1 = (b + 1) * ranges.size() / n;
+    float best = std::numeric_limits<float>::infinity();
+    for (size_t i = i0; i < i1; ++i)
+      if (valid(ranges[i]) && ranges[i] < best) best = ranges[i];
+    if (std::isfinite(best)) out[b] = best;  // else 0: no return
+  }
+  return out;
 }
 
 RunMetrics runBridge(const BridgeOptions& o) {
@@ -215,6 +249,80 @@ RunMetrics runBridge(const BridgeOptions& o) {
   m.min_clearance_m = std::numeric_limits<double>::infinity();
   std::string end_reason = "finished";
 
+  struct PendingScan {
+    BridgeMessage msg;
+    TPose2D odom;  // the pose when it arrived
+    double t = 0;
+  };
+  std::map<std::string, std::optional<PendingScan>> pending;
+  size_t superseded = 0, reduced = 0;
+  auto integrate = [&](PendingScan& ps) {
+    const SensorParams& s = lidars.at(ps.msg.label);
+    const double tn = ps.t;
+    const TPose2D& at = ps.odom;
+    if (s.type == "range-array") {
+      const auto valid = [&](float r) { return std::isfinite(r) && r > 0 && r < s.range_max; };
+      const size_t cap = static_cast<size_t>(std::max(1, s.segments));
+      if (ps.msg.ranges.size() > cap) ++reduced;
+      const std::vector<float> ranges = reduceRanges(ps.msg.ranges, cap, valid);
+      // Segments spread evenly over the fov, each a cone (the Leddar).
+      mrpt::obs::CObservationRange ra;
+      ra.sensorLabel = s.label;
+      ra.minSensorDistance = static_cast<float>(s.range_min);
+      ra.maxSensorDistance = static_cast<float>(s.range_max);
+      const double seg = mrpt::DEG2RAD(s.fov) / static_cast<double>(ranges.size());
+      ra.sensorConeApperture = static_cast<float>(seg);
+      for (size_t i = 0; i < ranges.size(); ++i) {
+        const float r = ranges[i];
+        mrpt::obs::CObservationRange::TMeasurement me;
+        me.sensorID = static_cast<uint16_t>(i);
+        me.sensorPose = mrpt::math::TPose3D(
+            s.x, s.y, s.z, mrpt::DEG2RAD(s.yaw - s.fov / 2) + (static_cast<double>(i) + 0.5) * seg,
+            mrpt::DEG2RAD(s.pitch), mrpt::DEG2RAD(s.roll));
+        me.sensedDistance = valid(r) ? r : static_cast<float>(s.range_max);
+        ra.sensedData.push_back(me);
+      }
+      navigator.addObservation(ra, at, tn);
+      return;
+    }
+    const auto valid = [&](float r) {
+      return std::isfinite(r) && r >= s.range_min && r < s.range_max;
+    };
+    const size_t cap = static_cast<size_t>(std::max(1, s.beams));
+    if (ps.msg.ranges.size() > cap) ++reduced;
+    const std::vector<float> ranges = reduceRanges(ps.msg.ranges, cap, valid);
+    auto scan = std::make_shared<mrpt::obs::CObservation2DRangeScan>();
+    scan->sensorLabel = s.label;
+    scan->aperture = static_cast<float>(mrpt::DEG2RAD(s.fov));
+    scan->rightToLeft = true;
+    scan->maxRange = static_cast<float>(s.range_max);
+    scan->sensorPose = mrpt::poses::CPose3D(s.x, s.y, s.z, mrpt::DEG2RAD(s.yaw),
+                                            mrpt::DEG2RAD(s.pitch), mrpt::DEG2RAD(s.roll));
+    scan->resizeScan(ranges.size());
+    for (size_t i = 0; i < ranges.size(); ++i) {
+      const float r = ranges[i];
+      scan->setScanRange(i, valid(r) ? r : static_cast<float>(s.range_max));
+      scan->setScanRangeValidity(i, valid(r));
+    }
+    navigator.addObservation(*scan, at, tn);
+    if (loc && s.label == loc_sensor) {
+      const mrpt::poses::CPose2D now_odo(at.x, at.y, at.phi);
+      const mrpt::poses::CPose2D inc =
+          loc_started ? now_odo - last_loc_odo : mrpt::poses::CPose2D();
+      last_loc_odo = now_odo;
+      loc_started = true;
+      loc->step(inc, scan, tn);
+      const auto p = loc->pose();
+      navigator.setMapPose({p.x(), p.y(), p.phi()});
+      // HOBBIT: localisation may ask for a turn in place to relocalise.
+      navigator.setRotateRequest(loc->needsRotateInPlace());
+    }
+  };
+  // Input taken per pass of the loop: at most two of the longest lines, so
+  // a robot that floods the socket cannot hold the control loop.
+  const size_t max_read = 2 * sock.max_line;
+  double last_heard = 0;
+
   while (true) {
     if (o.stop && o.stop->load()) {
       end_reason = "interrupted";
@@ -231,11 +339,12 @@ RunMetrics runBridge(const BridgeOptions& o) {
     std::vector<std::string> lines;
     bool alive = true;
     try {
-      alive = sock.readLines(lines, std::max(0, static_cast<int>((next - now()) * 1000)));
+      alive = sock.readLines(lines, std::max(0, static_cast<int>((next - now()) * 1000)), max_read);
     } catch (const std::exception& e) {
       error = InputError(where + ": " + e.what());
       break;
     }
+    if (!lines.empty()) last_heard = now();
     for (const auto& l : lines) {
       ++line_no;
       std::optional<BridgeMessage> msg;
@@ -256,66 +365,19 @@ RunMetrics runBridge(const BridgeOptions& o) {
           break;
         case BridgeMessage::Kind::Scan: {
           robot_t = std::max(robot_t, msg->t);
-          const auto it = lidars.find(msg->label);
-          if (it == lidars.end()) {
+          if (lidars.find(msg->label) == lidars.end()) {
             error = InputError(where + " line " + std::to_string(line_no) + ": scan from '" +
-                               msg->label + "', which " + o.profile + " has no [sensor." +
-                               msg->label + "] lidar2d or range-array for");
+                               printableText(msg->label, 64) + "', which " + o.profile +
+                               " has no [sensor." + printableText(msg->label, 64) +
+                               "] lidar2d or range-array for");
             break;
           }
           if (!have_odom) break;  // no pose to place it at yet
-          const SensorParams& s = it->second;
-          if (s.type == "range-array") {
-            // Segments spread evenly over the fov, each a cone (the Leddar).
-            mrpt::obs::CObservationRange ra;
-            ra.sensorLabel = s.label;
-            ra.minSensorDistance = static_cast<float>(s.range_min);
-            ra.maxSensorDistance = static_cast<float>(s.range_max);
-            const double seg = mrpt::DEG2RAD(s.fov) / static_cast<double>(msg->ranges.size());
-            ra.sensorConeApperture = static_cast<float>(seg);
-            for (size_t i = 0; i < msg->ranges.size(); ++i) {
-              const float r = msg->ranges[i];
-              mrpt::obs::CObservationRange::TMeasurement me;
-              me.sensorID = static_cast<uint16_t>(i);
-              me.sensorPose = mrpt::math::TPose3D(
-                  s.x, s.y, s.z,
-                  mrpt::DEG2RAD(s.yaw - s.fov / 2) + (static_cast<double>(i) + 0.5) * seg,
-                  mrpt::DEG2RAD(s.pitch), mrpt::DEG2RAD(s.roll));
-              me.sensedDistance = std::isfinite(r) && r > 0 && r < s.range_max
-                                      ? r
-                                      : static_cast<float>(s.range_max);
-              ra.sensedData.push_back(me);
-            }
-            navigator.addObservation(ra, odom, tn);
-            break;
-          }
-          auto scan = std::make_shared<mrpt::obs::CObservation2DRangeScan>();
-          scan->sensorLabel = s.label;
-          scan->aperture = static_cast<float>(mrpt::DEG2RAD(s.fov));
-          scan->rightToLeft = true;
-          scan->maxRange = static_cast<float>(s.range_max);
-          scan->sensorPose = mrpt::poses::CPose3D(s.x, s.y, s.z, mrpt::DEG2RAD(s.yaw),
-                                                  mrpt::DEG2RAD(s.pitch), mrpt::DEG2RAD(s.roll));
-          scan->resizeScan(msg->ranges.size());
-          for (size_t i = 0; i < msg->ranges.size(); ++i) {
-            const float r = msg->ranges[i];
-            const bool valid = std::isfinite(r) && r >= s.range_min && r < s.range_max;
-            scan->setScanRange(i, valid ? r : static_cast<float>(s.range_max));
-            scan->setScanRangeValidity(i, valid);
-          }
-          navigator.addObservation(*scan, odom, tn);
-          if (loc && s.label == loc_sensor) {
-            const mrpt::poses::CPose2D now_odo(odom.x, odom.y, odom.phi);
-            const mrpt::poses::CPose2D inc =
-                loc_started ? now_odo - last_loc_odo : mrpt::poses::CPose2D();
-            last_loc_odo = now_odo;
-            loc_started = true;
-            loc->step(inc, scan, tn);
-            const auto p = loc->pose();
-            navigator.setMapPose({p.x(), p.y(), p.phi()});
-            // HOBBIT: localisation may ask for a turn in place to relocalise.
-            navigator.setRotateRequest(loc->needsRotateInPlace());
-          }
+          // Only the newest scan of each sensor in this batch is used: an
+          // older one is superseded (and the work per cycle stays bounded).
+          auto& slot = pending[msg->label];
+          superseded += slot.has_value();
+          slot = PendingScan{std::move(*msg), odom, tn};
           break;
         }
         case BridgeMessage::Kind::Intent:
@@ -330,20 +392,35 @@ RunMetrics runBridge(const BridgeOptions& o) {
       if (error || bye) break;
     }
     if (error) break;
+    for (auto& [label, ps] : pending)
+      if (ps) {
+        integrate(*ps);
+        ps.reset();
+      }
     if (bye) {
       end_reason = "robot said bye";
       break;
     }
     if (!alive) {
       const std::string part = sock.pendingPartial();
-      error = InputError(where + ": the robot closed the connection without 'bye'" +
-                         (part.empty() ? std::string()
-                                       : " (its last line was cut: '" + part.substr(0, 60) + "')"));
+      error = InputError(
+          where + ": the robot closed the connection without 'bye'" +
+          (sock.resetByPeer() ? std::string(" (reset: nothing more can be sent to it)")
+                              : std::string()) +
+          (part.empty() ? std::string()
+                        : " (its last line was cut: '" + printableText(part, 60) + "')"));
       break;
     }
     const double t = now();
+    if (o.silence_timeout > 0 && t - last_heard > o.silence_timeout) {
+      error = InputError(where + ": the robot sent nothing for " + fmt(o.silence_timeout, 1) +
+                         " s (--silence-timeout)");
+      break;
+    }
     if (t < next) continue;
-    next = std::max(next + dt, t);
+    // Cycles at the rate, and never closer than 0.9 periods after a late
+    // one (so that sensor_timeout / period bounds the cycles on old data).
+    next = std::max(next + dt, t + 0.9 * dt);
 
     // One control cycle.
     std::optional<Twist> user;
@@ -368,8 +445,12 @@ RunMetrics runBridge(const BridgeOptions& o) {
     const Navigator::Cycle cyc = navigator.cycle(t);
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0).count();
-    if (!sock.sendLine(formatCommand(robot_t, cyc.decision.cmd))) {
-      error = InputError(where + ": the robot closed the connection without 'bye'");
+    // A robot that does not take its command within a period is not
+    // listening: the run ends (it must stop by itself without commands).
+    if (!sock.sendLine(formatCommand(robot_t, cyc.decision.cmd),
+                       std::max(1, static_cast<int>(dt * 1000)))) {
+      error = InputError(where + (sock.open() ? ": the robot does not read its commands"
+                                              : ": the robot closed the connection without 'bye'"));
       break;
     }
     cycle_ms_sum += ms;
@@ -475,7 +556,9 @@ RunMetrics runBridge(const BridgeOptions& o) {
           x1 = std::max(x1, p.x + 1);
           y1 = std::max(y1, p.y + 1);
         }
-      const double res = 0.05;
+      // 5 cm cells, coarser when what was driven is larger than 200 m, so
+      // the canvas stays about 4000 cells a side at most.
+      const double res = std::max(0.05, std::max(x1 - x0, y1 - y0) / 4000);
       const auto canvas = io::makeGrid(x0, y0, res, static_cast<size_t>((x1 - x0) / res) + 1,
                                        static_cast<size_t>((y1 - y0) / res) + 1, 0.5f);
       io::renderGridMapPng(canvas, png, ro);

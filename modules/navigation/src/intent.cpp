@@ -216,7 +216,9 @@ class TcpIntent : public IntentSource {
     std::vector<std::string> lines;
     if (client_.open()) {
       try {
-        client_.readLines(lines, 0);
+        // A client that closes (or half-closes, or resets) is a user who
+        // left: the source ends, the robot is stopped (finished()).
+        if (!client_.readLines(lines, 0, 2 * client_.max_line)) dropped_ = true;
       } catch (const std::exception& e) {
         throw InputError(describe() + ": " + e.what());
       }
@@ -229,16 +231,17 @@ class TcpIntent : public IntentSource {
       double v, w;
       std::string extra;
       if (!(in >> v >> w) || (in >> extra) || !std::isfinite(v) || !std::isfinite(w))
-        throw InputError(describe() + " line " + std::to_string(line_no_) + ": '" + s +
-                         "' is not 'v w' (two numbers, m/s and rad/s)");
+        throw InputError(describe() + " line " + std::to_string(line_no_) + ": '" +
+                         printableText(s, 80) + "' is not 'v w' (two numbers, m/s and rad/s)");
       last_ = IntentSample{{std::clamp(v, r_.v_min, r_.v_max), std::clamp(w, -r_.w_max, r_.w_max)},
                            now};
     }
     return last_;
   }
-  bool finished(double) const override { return false; }
+  bool finished(double) const override { return dropped_; }
 
  private:
+  bool dropped_ = false;
   TcpListener listener_;
   std::string host_;
   RobotParams r_;

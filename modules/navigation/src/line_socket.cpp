@@ -10,8 +10,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 #include <thread>
@@ -46,7 +48,8 @@ LineSocket::LineSocket(int fd) : fd_(fd) {
   }
 }
 LineSocket::~LineSocket() { close(); }
-LineSocket::LineSocket(LineSocket&& o) noexcept : fd_(o.fd_), buf_(std::move(o.buf_)) {
+LineSocket::LineSocket(LineSocket&& o) noexcept
+    : fd_(o.fd_), peer_done_(o.peer_done_), reset_(o.reset_), buf_(std::move(o.buf_)) {
   max_line = o.max_line;
   o.fd_ = -1;
 }
@@ -54,6 +57,8 @@ LineSocket& LineSocket::operator=(LineSocket&& o) noexcept {
   if (this != &o) {
     close();
     fd_ = o.fd_;
+    peer_done_ = o.peer_done_;
+    reset_ = o.reset_;
     buf_ = std::move(o.buf_);
     max_line = o.max_line;
     o.fd_ = -1;
@@ -65,24 +70,40 @@ void LineSocket::close() {
   fd_ = -1;
 }
 
-bool LineSocket::readLines(std::vector<std::string>& out, int timeout_ms) {
-  if (fd_ < 0) return false;
+void LineSocket::shutdownWrite() {
+  if (fd_ >= 0) ::shutdown(fd_, SHUT_WR);
+}
+void LineSocket::abort() {
+  if (fd_ < 0) return;
+  linger l{1, 0};
+  setsockopt(fd_, SOL_SOCKET, SO_LINGER, &l, sizeof l);
+  close();
+}
+
+bool LineSocket::readLines(std::vector<std::string>& out, int timeout_ms, size_t max_bytes) {
+  if (fd_ < 0 || peer_done_) return false;
   pollfd p{fd_, POLLIN, 0};
   if (::poll(&p, 1, timeout_ms) <= 0) return true;
   char b[8192];
-  for (;;) {
-    const ssize_t r = ::recv(fd_, b, sizeof b, 0);
+  size_t taken = 0;
+  while (taken < max_bytes) {
+    const ssize_t r = ::recv(fd_, b, std::min(sizeof b, max_bytes - taken), 0);
     if (r == 0) {
-      close();
+      // Closed or half-closed: nothing more comes, but the peer may still
+      // read (the caller's last command and 'stop' must reach it).
+      peer_done_ = true;
       break;
     }
     if (r < 0) {
       if (errno == EAGAIN || errno == EWOULDBLOCK) break;
       if (errno == EINTR) continue;
+      reset_ = true;
+      peer_done_ = true;
       close();
       break;
     }
     buf_.append(b, static_cast<size_t>(r));
+    taken += static_cast<size_t>(r);
   }
   size_t start = 0, nl;
   while ((nl = buf_.find('\n', start)) != std::string::npos) {
@@ -100,21 +121,27 @@ bool LineSocket::readLines(std::vector<std::string>& out, int timeout_ms) {
     buf_.clear();
     throw std::runtime_error("a line longer than " + std::to_string(max_line) + " bytes");
   }
-  return fd_ >= 0;
+  return !peer_done_;
 }
 
-bool LineSocket::sendLine(const std::string& line) {
+bool LineSocket::sendLine(const std::string& line, int timeout_ms) {
   if (fd_ < 0) return false;
   const std::string s = line + "\n";
+  const auto t0 = std::chrono::steady_clock::now();
   size_t done = 0;
   while (done < s.size()) {
     const ssize_t w = ::send(fd_, s.data() + done, s.size() - done, MSG_NOSIGNAL);
-    if (w < 0 && (errno == EAGAIN || errno == EINTR)) {
+    if (w < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) {
+      const int spent = static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                             std::chrono::steady_clock::now() - t0)
+                                             .count());
+      if (spent >= timeout_ms) return false;  // the peer does not read
       pollfd p{fd_, POLLOUT, 0};
-      ::poll(&p, 1, 100);
+      ::poll(&p, 1, timeout_ms - spent);
       continue;
     }
     if (w <= 0) {
+      reset_ = reset_ || errno == ECONNRESET || errno == EPIPE;
       close();
       return false;
     }
@@ -165,6 +192,25 @@ LineSocket TcpListener::accept(int timeout_ms) {
   if (::poll(&p, 1, timeout_ms) <= 0) return LineSocket();
   const int c = ::accept(fd_, nullptr, nullptr);
   return LineSocket(c);
+}
+
+std::string printableText(const std::string& s, size_t max_chars) {
+  std::string o;
+  size_t i = 0;
+  for (; i < s.size() && o.size() < max_chars; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c == '\\') {
+      o += "\\\\";
+    } else if (c < 0x20 || c >= 0x7f) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\x%02x", c);
+      o += b;
+    } else {
+      o += static_cast<char>(c);
+    }
+  }
+  if (i < s.size()) o += "... (" + std::to_string(s.size() - i) + " more bytes)";
+  return o;
 }
 
 std::pair<std::string, int> parseHostPort(const std::string& s, const std::string& default_host) {

@@ -12,16 +12,50 @@ namespace carenav::navigation {
 ObstacleMemory::ObstacleMemory(double resolution, double persistence, double radius)
     : res_(resolution), persistence_(persistence), radius_(radius) {}
 
-int64_t ObstacleMemory::key(double x, double y) const {
-  const auto ix = static_cast<int64_t>(std::floor(x / res_));
-  const auto iy = static_cast<int64_t>(std::floor(y / res_));
-  return (ix << 32) ^ (iy & 0xffffffff);
+namespace {
+
+/** Cell index of a coordinate: floor(v / res), clamped to the 32 bits a
+ *  cell key holds (a coordinate beyond 2^31 cells, ~1e8 m at 5 cm, lands in
+ *  the border cell instead of overflowing); NaN gives the lowest cell (off
+ *  every grid; the memories skip non-finite points). No conversion of an
+ *  out-of-range double to an integer, no shift of a negative value. */
+int32_t cellIndex(double v, double res) {
+  const double c = std::floor(v / res);
+  if (!(c > static_cast<double>(std::numeric_limits<int32_t>::min())))
+    return std::numeric_limits<int32_t>::min();
+  if (c >= static_cast<double>(std::numeric_limits<int32_t>::max()))
+    return std::numeric_limits<int32_t>::max();
+  return static_cast<int32_t>(c);
 }
+
+/** Two cell indices in one key: x in the high 32 bits, y in the low ones,
+ *  each as its two's-complement bit pattern (unsigned arithmetic only). */
+uint64_t packCell(double x, double y, double res) {
+  return (static_cast<uint64_t>(static_cast<uint32_t>(cellIndex(x, res))) << 32) |
+         static_cast<uint64_t>(static_cast<uint32_t>(cellIndex(y, res)));
+}
+
+int32_t signedHalf(uint64_t bits32) {
+  const auto u = static_cast<uint32_t>(bits32);
+  return u <= static_cast<uint32_t>(std::numeric_limits<int32_t>::max())
+             ? static_cast<int32_t>(u)
+             : static_cast<int32_t>(u - 0x80000000u) + std::numeric_limits<int32_t>::min();
+}
+int32_t keyX(uint64_t key) { return signedHalf(key >> 32); }
+int32_t keyY(uint64_t key) { return signedHalf(key & 0xffffffffu); }
+
+bool finite(const TPoint2D& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
+
+}  // namespace
+
+uint64_t ObstacleMemory::key(double x, double y) const { return packCell(x, y, res_); }
 
 void ObstacleMemory::add(const WorldScan& s, double t) {
   // Clear along each ray, from where the sensor sees to one cell before
-  // the end point, then mark the hits.
+  // the end point, then mark the hits. Non-finite points are no cells.
+  if (!finite(s.origin)) return;
   for (size_t i = 0; i < s.ends.size(); ++i) {
+    if (!finite(s.ends[i])) continue;
     const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
     const double len = std::hypot(dx, dy);
     if (len <= 0) continue;
@@ -32,18 +66,19 @@ void ObstacleMemory::add(const WorldScan& s, double t) {
     }
   }
   for (size_t i = 0; i < s.ends.size(); ++i)
-    if (i < s.hit.size() && s.hit[i]) cells_[key(s.ends[i].x, s.ends[i].y)] = t;
+    if (i < s.hit.size() && s.hit[i] && finite(s.ends[i]))
+      cells_[key(s.ends[i].x, s.ends[i].y)] = t;
 }
 
 void ObstacleMemory::addPoints(const std::vector<TPoint2D>& points, double t) {
-  for (const auto& p : points) cells_[key(p.x, p.y)] = t;
+  for (const auto& p : points)
+    if (finite(p)) cells_[key(p.x, p.y)] = t;
 }
 
 void ObstacleMemory::prune(double now, const TPoint2D& robot) {
   for (auto it = cells_.begin(); it != cells_.end();) {
-    const double x = (static_cast<double>(it->first >> 32) + 0.5) * res_;
-    const double y =
-        (static_cast<double>(static_cast<int32_t>(it->first & 0xffffffff)) + 0.5) * res_;
+    const double x = (static_cast<double>(keyX(it->first)) + 0.5) * res_;
+    const double y = (static_cast<double>(keyY(it->first)) + 0.5) * res_;
     if (now - it->second > persistence_ || std::hypot(x - robot.x, y - robot.y) > radius_)
       it = cells_.erase(it);
     else
@@ -56,21 +91,18 @@ std::vector<TPoint2D> ObstacleMemory::points() const {
   out.reserve(cells_.size());
   for (const auto& [k, t] : cells_) {
     (void)t;
-    out.push_back({(static_cast<double>(k >> 32) + 0.5) * res_,
-                   (static_cast<double>(static_cast<int32_t>(k & 0xffffffff)) + 0.5) * res_});
+    out.push_back(
+        {(static_cast<double>(keyX(k)) + 0.5) * res_, (static_cast<double>(keyY(k)) + 0.5) * res_});
   }
   return out;
 }
 
 // ---------------------------------------------------------------- free space
 
-int64_t FreeSpaceHistory::key(double x, double y) const {
-  const auto ix = static_cast<int64_t>(std::floor(x / res_));
-  const auto iy = static_cast<int64_t>(std::floor(y / res_));
-  return (ix << 32) ^ (iy & 0xffffffff);
-}
+uint64_t FreeSpaceHistory::key(double x, double y) const { return packCell(x, y, res_); }
 
 void FreeSpaceHistory::markFree(double x, double y, double t) {
+  if (!std::isfinite(x) || !std::isfinite(y)) return;
   auto [it, fresh] = cells_.try_emplace(key(x, y), Stretch{t, t});
   if (fresh) return;
   // A hit since, or a gap longer than a second between sightings, starts a
@@ -85,18 +117,20 @@ void FreeSpaceHistory::markHit(double x, double y, double t) {
 }
 
 void FreeSpaceHistory::addScan(const WorldScan& s, double t) {
+  if (!finite(s.origin)) return;
   for (size_t i = 0; i < s.ends.size(); ++i) {
+    if (!finite(s.ends[i])) continue;
     const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
     const double len = std::hypot(dx, dy);
     if (len <= 0) continue;
     // Stop two cells short of a hit: the range noise must not free the
     // obstacle's own cell.
     const double stop = std::min((i < s.hit.size() && s.hit[i]) ? len - 2 * res_ : len, radius_);
-    int64_t last = 0;
+    uint64_t last = 0;
     bool any = false;
     for (double d = std::max(s.range_min, 0.0); d < stop; d += res_) {
       const double x = s.origin.x + dx * d / len, y = s.origin.y + dy * d / len;
-      const int64_t k = key(x, y);
+      const uint64_t k = key(x, y);
       if (any && k == last) continue;
       markFree(x, y, t);
       last = k;
@@ -281,8 +315,9 @@ LocalCostmap::LocalCostmap(const NavigationParams& p, const Footprint& footprint
   dist_.assign(static_cast<size_t>(n_) * n_, static_cast<float>(far_));
 }
 
-int LocalCostmap::cellX(double x) const { return static_cast<int>(std::floor((x - x0_) / res_)); }
-int LocalCostmap::cellY(double y) const { return static_cast<int>(std::floor((y - y0_) / res_)); }
+// Clamped like the memory's keys: a point far off the grid is just outside.
+int LocalCostmap::cellX(double x) const { return cellIndex(x - x0_, res_); }
+int LocalCostmap::cellY(double y) const { return cellIndex(y - y0_, res_); }
 
 void LocalCostmap::build(const TPoint2D& c, const std::vector<TPoint2D>& obstacles,
                          const mrpt::maps::COccupancyGridMap2D* static_map,

@@ -64,6 +64,13 @@ class RawlogError : public InputError {
   uint64_t offset_;
 };
 
+/** Bounds on what one entry may make MRPT allocate at once (docs/rawlog.md):
+ *  the bytes left in the stream, raised to the minimum (images decoded on
+ *  reading may be larger than their bytes), capped at the maximum. A request
+ *  beyond is refused before the allocation, as a corrupt size field. */
+constexpr uint64_t kRawlogMinAllocation = uint64_t{64} << 20;  ///< 64 MiB
+constexpr uint64_t kRawlogMaxAllocation = uint64_t{1} << 30;   ///< 1 GiB
+
 class RawlogReader {
  public:
   /** Opens the file. Throws InputError when it is missing, unreadable, a

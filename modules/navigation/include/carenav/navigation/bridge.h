@@ -28,6 +28,7 @@
 #include <carenav/navigation/scenario.h>
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -44,11 +45,26 @@ struct BridgeMessage {
   std::vector<float> ranges;  ///< scan
 };
 
+/** Plausibility bounds of the numbers a robot sends (docs/navigate.md):
+ *  anything beyond is refused as a malformed line. Coordinates as the
+ *  simulator's worlds (100 km); yaw may be unwrapped (a million radians);
+ *  robot time may be Unix time (1e12 s is year 33658). */
+constexpr double kBridgeMaxCoordinate = 1e5;  ///< m, |x|, |y| of odom
+constexpr double kBridgeMaxYaw = 1e6;         ///< rad
+constexpr double kBridgeMaxSpeed = 1e3;       ///< m/s or rad/s, odom and intent
+constexpr double kBridgeMaxTime = 1e12;       ///< s, |T|
+
 /** Parses one robot -> carenav line; nullopt for empty and comment lines.
  *  Throws std::invalid_argument saying what is wrong. */
 std::optional<BridgeMessage> parseBridgeLine(const std::string& line);
 /** "cmd T V W". */
 std::string formatCommand(double t, const Twist& c);
+/** A scan of more than `n` ranges reduced to `n`: each output range the
+ *  nearest valid range of its share of the input (0, no return, when it has
+ *  none), so no obstacle is lost and the work per scan is bounded by the
+ *  profile's beam count. Fewer ranges come back unchanged. */
+std::vector<float> reduceRanges(const std::vector<float>& ranges, size_t n,
+                                const std::function<bool(float)>& valid);
 
 struct BridgeOptions {
   std::string address;            ///< HOST:PORT of the robot's bridge
@@ -65,6 +81,10 @@ struct BridgeOptions {
   double control_rate = 10;  ///< Hz, real time
   double duration = 0;       ///< s; 0: until "bye", the source ends or `stop`
   double connect_timeout = 10;
+  /** s; a robot that sends no line for this long (connected, but silent)
+   *  ends the run: `cmd T 0 0`, `stop error`, exit 2. Scans older than
+   *  sensor_timeout already stop it before. */
+  double silence_timeout = 5;
   std::string out_dir;  ///< run.png, navlog.csv, summary.json; empty: none
   const std::atomic<bool>* stop = nullptr;
   bool progress = false;

@@ -48,9 +48,9 @@ class ObstacleMemory {
   void clear() { cells_.clear(); }
 
  private:
-  int64_t key(double x, double y) const;
+  uint64_t key(double x, double y) const;
   double res_, persistence_, radius_;
-  std::unordered_map<int64_t, double> cells_;  // cell -> last time seen
+  std::unordered_map<uint64_t, double> cells_;  // cell -> last time seen
 };
 
 /** Where free space was seen recently (ray clearing of scans, free cells of
@@ -81,13 +81,13 @@ class FreeSpaceHistory {
   size_t size() const { return cells_.size(); }
 
  private:
-  int64_t key(double x, double y) const;
+  uint64_t key(double x, double y) const;
   double res_, radius_;
   struct Stretch {
     double first = 0, last = 0;
     double hit = -1e300;
   };
-  std::unordered_map<int64_t, Stretch> cells_;
+  std::unordered_map<uint64_t, Stretch> cells_;
 };
 
 /** The robot's footprint with what the queries need. */
