@@ -84,7 +84,7 @@ Scenario parseScenario(const std::string& text, const std::string& origin,
   static const std::set<std::string> known = {
       "format",    "name",        "world",          "profile",      "plugin",   "start",
       "goal",      "intent",      "intent_heading", "heading_gain", "duration", "reach",
-      "forbidden", "path_exists", "seed",           "places",       "end"};
+      "forbidden", "path_exists", "seed",           "places",       "user_speed", "end"};
   for (size_t i = 0; i < root.map.size(); ++i)
     if (!known.count(root.map[i].first))
       throw InputError(origin + ":" + std::to_string(root.key_lines[i]) + ": unknown key '" +
