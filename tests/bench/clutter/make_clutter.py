@@ -11,7 +11,8 @@ on the posts' squares), and the narrowest gap along the widest way is
 written to the manifest.
 
 The robot (`robot.ini`): a 0.51 m x 0.43 m differential base, a 270 deg
-lidar of 720 beams at 10 Hz, 2.0 m/s and 4.0 rad/s at most (the runner
+lidar of 720 beams at 10 Hz, 2.0 m/s and 4.0 rad/s at most, reversing at up
+to 0.5 m/s (the runner
 lowers the limits with --set). A run fails on a collision or after 100 s.
 
   python3 tests/bench/clutter/make_clutter.py --n 100 --seed 1 --out /tmp/clutter1
@@ -37,7 +38,7 @@ GOAL = (11.0, 2.5)
 ROBOT_LEN, ROBOT_WID = 0.51, 0.43
 
 ROBOT_INI = """; Benchmark robot of tests/bench/clutter (written by make_clutter.py):
-; a 0.51 m x 0.43 m differential base with a 270 deg lidar, 2 m/s and 4 rad/s.
+; a 0.51 m x 0.43 m differential base with a 270 deg lidar, 2 m/s and 4 rad/s, reversing at 0.5 m/s.
 [profile]
 name = clutter-robot
 description = clutter benchmark robot: 0.51 x 0.43 m differential base, 270 deg lidar
@@ -47,7 +48,7 @@ base = {base}
 footprint = 0.255,0.215 -0.255,0.215 -0.255,-0.215 0.255,-0.215
 height = 0.5
 v_max = 2.0
-v_min = 0.0
+v_min = -0.5
 w_max = 4.0
 acc_v = 2.0
 acc_w = 4.0
