@@ -57,7 +57,11 @@ double brakingScale(const LocalCostmap& map, const TPose2D& pose, const Twist& c
     // Already in contact (within footprint_padding) where the robot stands:
     // a command that moves it away, its footprint's distance to the
     // obstacles never shrinking along the sweep, passes; anything else stops.
+    // The distances are those of the cells the footprint's samples fall in:
+    // when a sample lies on an obstacle cell (0) a move towards it cannot be
+    // told from one away, so nothing passes.
     const double d0 = footprintDistance(map, pose);
+    if (d0 <= 0) return 0.0;
     for (double t = step / 2; t <= horizon + 1e-9; t += step / 2)
       if (footprintDistance(map, integrateArc(pose, c.v, c.w, t)) < d0 - 1e-6) return 0.0;
     return 1.0;
