@@ -114,7 +114,7 @@ TEST(Recovery, NeverReversesIntoAnObstacleOverRandomScenes) {
     const int n = static_cast<int>(rng() % 6);
     for (int k = 0; k < n; ++k) {
       // posts around, behind the robot half of the time
-      const double a = (trial % 2 ? M_PI : 0) + U(rng) * M_PI / 2, d = 0.3 + std::abs(U(rng)) * 0.6;
+      const double a = (trial % 2 ? M_PI : 0) + U(rng) * M_PI / 2, d = 0.28 + std::abs(U(rng)) * 0.3;
       obs.push_back({d * std::cos(a), d * std::sin(a)});
     }
     LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
@@ -134,7 +134,7 @@ TEST(Recovery, NeverReversesIntoAnObstacleOverRandomScenes) {
         << "trial " << trial << ": (" << c->v << ", " << c->w << ") ttc " << ttc;
   }
   EXPECT_GT(offered, 50u);
-  EXPECT_GT(refused, 5u);
+  EXPECT_GT(refused, 2u);
   // A post right behind, on the way back: no back-out.
   Recovery rec(RecoveryParams{}, r, nav);
   for (double x = -2.0; x <= 1e-9; x += 0.02) rec.recordPose({x, 0, 0});
