@@ -40,6 +40,7 @@ struct NavigateArgs {
   std::string scenario, suite, profile, plugins, out, goal;
   std::vector<std::string> sets;
   bool json = false;
+  bool continue_after_collision = false;
   double rate = 10;
   // the live app
   std::string world, start, intent, bridge, map;
@@ -100,6 +101,9 @@ std::string serialize(const navigation::RunMetrics& m) {
   line("final_goal_error_m", m.final_goal_error_m);
   line("wall_seconds", m.wall_seconds);
   line("entered_forbidden", m.entered_forbidden);
+  line("left_map", m.left_map);
+  line("recoveries", m.recoveries);
+  line("recovery_cycles", m.recovery_cycles);
   for (const auto& f : m.outputs) line("output", f);
   return o.str();
 }
@@ -158,6 +162,12 @@ navigation::RunMetrics deserialize(const std::string& text) {
       m.wall_seconds = d;
     else if (k == "entered_forbidden")
       m.entered_forbidden = v == "1";
+    else if (k == "left_map")
+      m.left_map = v == "1";
+    else if (k == "recoveries")
+      m.recoveries = n;
+    else if (k == "recovery_cycles")
+      m.recovery_cycles = n;
     else if (k == "output")
       m.outputs.push_back(v);
   }
@@ -248,6 +258,9 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
   cmd->add_option("--rate", a->rate, "Control rate, Hz (default 10)")
       ->check(CLI::Range(1.0, 100.0));
   cmd->add_flag("--json", a->json, "Print the metrics of every run as JSON");
+  cmd->add_flag("--continue-after-collision", a->continue_after_collision,
+                "Scenario runs: go on after a collision (counting them all) instead of ending the "
+                "run at the first (it fails either way)");
   auto* live = cmd->add_option_group(
       "live",
       "The live app: a user (or a goal) drives the robot in the simulator or, through the "
@@ -377,6 +390,8 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
       o.speed = a->speed.value_or(1.0);
       o.duration = a->duration;
       o.stop = &g_stop;
+      // a live user's session goes on after a bump (it is counted)
+      o.continue_after_collision = true;
       if (!a->intent.empty()) {
         Profile prof = Profile::load(!a->profile.empty() ? a->profile : s.profile);
         prof.applyOverrides(a->sets);
@@ -423,6 +438,7 @@ void addNavigateCommand(CLI::App& app, const GlobalOptions& g) {
         o.progress = !g.quiet;
         o.speed = a->speed.value_or(0.0);
         o.duration = a->duration;
+        o.continue_after_collision = a->continue_after_collision;
         if (!a->out.empty())
           o.out_dir = (fs::path(a->out) / (s.name + (p.empty() ? "" : "-" + p))).string();
         try {

@@ -1,6 +1,7 @@
 // goal-dwa: dynamic window towards the next waypoint of the global route
 // (Interbot and HOBBIT: [Conceicao16, Ch. 3]; [Puente14, App. Sec. IV-B]).
 #include <carenav/navigation/local_planner.h>
+#include <carenav/navigation/safety.h>
 
 #include <algorithm>
 #include <cmath>
@@ -82,16 +83,25 @@ class GoalDwa final : public LocalPlanner {
         Trajectory tr =
             rollout(*in.map, in.pose, s, p_.sim_time, p_.sim_step, cap, p_.obstacle_distance_cap);
         ++out.evaluated;
-        if (!tr.leaves_map && canBrake(s, tr.time_to_collision, r_, r_.safe_distance)) {
+        // Admissible: brakes before the first contact, and the supervisor
+        // (same footprint, braking model and safe distance) passes it unchanged.
+        if (!tr.leaves_map && canBrake(s, tr.time_to_collision, r_, r_.safe_distance) &&
+            brakingScale(*in.map, in.pose, s, r_, p_.sim_step) >= 1.0) {
           ++out.admissible;
-          const TPose2D e = integrateArc(in.pose, s.v, s.w, std::min(p_.score_time, p_.sim_time));
-          double heading_err;
+          const double ts = std::min(p_.score_time, p_.sim_time);
+          const TPose2D e = integrateArc(in.pose, s.v, s.w, ts);
+          // The heading error after ts, unwrapped: the turn still needed
+          // (from the start heading, within +-pi) less the turn made, w ts,
+          // which may exceed pi at a fast robot's turn rate. Wrapping it
+          // would make a spin past the target look as good as stopping on it.
+          double needed;
           if (in.goal && to_goal < p_.goal_tolerance)
-            heading_err = std::abs(angleDiff(target_heading, e.phi));
+            needed = angleDiff(target_heading, in.pose.phi);
           else {
             const TPoint2D t = lookaheadPoint(path, e.x, e.y, p_.lookahead, corner_);
-            heading_err = std::abs(angleDiff(std::atan2(t.y - e.y, t.x - e.x), e.phi));
+            needed = angleDiff(std::atan2(t.y - e.y, t.x - e.x), in.pose.phi);
           }
+          const double heading_err = std::abs(needed - s.w * ts);
           const double path_dist = distanceToPath(path, e.x, e.y);
           const double speed = r_.v_max > 0 ? (r_.v_max - s.v) / r_.v_max : 0;
           tr.cost = p_.k_heading * heading_err + p_.k_path * path_dist + p_.k_speed * speed +

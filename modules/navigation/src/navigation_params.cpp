@@ -1,6 +1,7 @@
 #include <carenav/common/profile.h>
 #include <carenav/navigation/mrpt_ptg.h>
 #include <carenav/navigation/navigation_params.h>
+#include <carenav/navigation/recovery.h>
 
 namespace carenav::navigation {
 
@@ -112,6 +113,10 @@ void registerProfileSections() {
   ProfileSchemas::instance().add(SectionSchema::of(
       MrptPtgParams::table(), "nav.mrpt_ptg",
       "mrpt-ptg local planner: MRPT's TP-space reactive navigation (PTGs, holonomic method)"));
+  ProfileSchemas::instance().add(SectionSchema::of(
+      RecoveryParams::table(), "nav.recovery",
+      "recovery behaviours of goal robots: back out along the recent path, turn, wait, "
+      "replan, give up"));
 }
 
 }  // namespace carenav::navigation

@@ -25,7 +25,12 @@ Navigator::Navigator(const NavigationParams& p, const RobotParams& robot)
         MovingTrackerParams t;
         t.gate = p.track_gate;
         return t;
-      }()) {}
+      }()),
+      recovery_(RecoveryParams{}, robot, p) {}
+
+void Navigator::setRecoveryParams(const RecoveryParams& rp) {
+  recovery_ = Recovery(rp, robot_, p_);
+}
 
 void Navigator::setOdometry(const TPose2D& pose, const Twist& measured, double t) {
   odom_ = pose;
@@ -162,7 +167,33 @@ void Navigator::addPerceivedFrame(const std::vector<TPoint2D>& free_cells,
 void Navigator::setRoute(const std::vector<TPoint2D>& waypoints, const TPose2D& goal) {
   route_ = waypoints;
   goal_ = goal;
+  recovery_.routeChanged(odom_t_.value_or(0.0));
 }
+
+namespace {
+
+/** Length of the route still to go from (x, y): to its nearest point, then along it. */
+double routeLeft(const std::vector<TPoint2D>& path, double x, double y) {
+  if (path.empty()) return 0;
+  if (path.size() == 1) return std::hypot(path[0].x - x, path[0].y - y);
+  size_t seg = 0;
+  double best = 1e18, best_u = 0;
+  for (size_t i = 0; i + 1 < path.size(); ++i) {
+    const auto& a = path[i];
+    const auto& b = path[i + 1];
+    const double vx = b.x - a.x, vy = b.y - a.y, l2 = vx * vx + vy * vy;
+    const double u = l2 > 0 ? std::clamp(((x - a.x) * vx + (y - a.y) * vy) / l2, 0.0, 1.0) : 0;
+    const double d = std::hypot(a.x + u * vx - x, a.y + u * vy - y);
+    if (d < best) best = d, seg = i, best_u = u;
+  }
+  double left = best + (1 - best_u) *
+                           std::hypot(path[seg + 1].x - path[seg].x, path[seg + 1].y - path[seg].y);
+  for (size_t i = seg + 1; i + 1 < path.size(); ++i)
+    left += std::hypot(path[i + 1].x - path[i].x, path[i + 1].y - path[i].y);
+  return left;
+}
+
+}  // namespace
 
 void Navigator::clearRoute() {
   route_.clear();
@@ -267,6 +298,17 @@ Navigator::Cycle Navigator::cycle(double now) {
   } else {
     c.plan = planner_->plan(in);
     c.goal_reached = goal_ && c.plan.ok && c.plan.note == "goal reached";
+    // Recovery behaviours (goal robots): boxed in or no progress.
+    if (goal_ && !planner_->needsUserIntent()) {
+      recovery_.recordPose(odom_);
+      const bool blocked = !c.plan.ok || blocked_;
+      if (auto r = recovery_.step(now, in, c.plan, blocked, routeLeft(in.path, odom_.x, odom_.y))) {
+        c.plan = *r;
+        c.recovery = Recovery::phaseName(recovery_.phase());
+        c.gave_up = recovery_.gaveUp();
+      }
+      c.replan = recovery_.takeReplanRequest();
+    }
   }
 
   SafetyInput s;
@@ -280,6 +322,10 @@ Navigator::Cycle Navigator::cycle(double now) {
   s.pose = odom_;
   s.map = &map_;
   c.decision = supervisor_.apply(s);
+  // Held: stopped, or slowed to a crawl (the planner and the supervisor
+  // share the braking rule, so this is rare: a recovery's business).
+  blocked_ = c.decision.action == SafetyAction::Stop ||
+             (std::abs(c.decision.cmd.v) < 0.01 && std::abs(c.decision.cmd.w) < 0.01);
   return c;
 }
 

@@ -26,6 +26,57 @@ double SafetySupervisor::timeToCollision(const LocalCostmap& map, const TPose2D&
   return std::numeric_limits<double>::infinity();
 }
 
+namespace {
+
+/** m, from the footprint at `pose` (outline and inside samples) to the
+ *  nearest obstacle cell centre of `map` (0 off the map). */
+double footprintDistance(const LocalCostmap& map, const TPose2D& pose) {
+  const double co = std::cos(pose.phi), si = std::sin(pose.phi);
+  double best = std::numeric_limits<double>::infinity();
+  const Footprint& fp = map.footprint();
+  for (const auto* pts : {&fp.boundary, &fp.interior})
+    for (const auto& b : *pts) {
+      const double d = map.distance(pose.x + co * b.x - si * b.y, pose.y + si * b.x + co * b.y);
+      best = std::min(best, d < 0 ? 0.0 : d);
+    }
+  return best;
+}
+
+}  // namespace
+
+double brakingScale(const LocalCostmap& map, const TPose2D& pose, const Twist& c,
+                    const RobotParams& r, double step, double margin) {
+  if (c.v == 0 && c.w == 0) return 1;
+  // Look as far ahead along the arc as braking from this command needs.
+  const double av = std::abs(c.v), aw = std::abs(c.w);
+  const double m = std::max(av / r.acc_v, aw / r.acc_w);  // stop time at full command
+  const double margin_t = av > 0 ? margin / av : 0.0;
+  const double horizon = m / 2 + margin_t + step;
+  const Trajectory tr = rollout(map, pose, c, horizon, step / 2, 0.0);
+  if (tr.collides && map.check(pose).collision) {
+    // Already in contact (within footprint_padding) where the robot stands:
+    // a command that moves it away, its footprint's distance to the
+    // obstacles never shrinking along the sweep, passes; anything else stops.
+    // The distances are those of the cells the footprint's samples fall in:
+    // when a sample lies on an obstacle cell (0) a move towards it cannot be
+    // told from one away, so nothing passes.
+    const double d0 = footprintDistance(map, pose);
+    if (d0 <= 0) return 0.0;
+    for (double t = step / 2; t <= horizon + 1e-9; t += step / 2)
+      if (footprintDistance(map, integrateArc(pose, c.v, c.w, t)) < d0 - 1e-6) return 0.0;
+    return 1.0;
+  }
+  // leaving the map: unknown beyond, treated as an obstacle
+  const double ttc =
+      tr.collides || tr.leaves_map ? tr.time_to_collision : std::numeric_limits<double>::infinity();
+  if (!std::isfinite(ttc)) return 1;
+  // Braking from s (v, w) covers the arc of s^2 m / 2 seconds at the full
+  // command; it must end margin_t before the contact: s^2 <= 2 (ttc - margin_t) / m.
+  // One rollout step less: the contact time is only known to a step.
+  const double room = ttc - margin_t - step / 2;
+  return room <= 0 ? 0.0 : std::min(1.0, std::sqrt(2 * room / m));
+}
+
 SafetyDecision SafetySupervisor::apply(const SafetyInput& in) const {
   SafetyDecision d;
   auto stop = [&](const std::string& why) {
@@ -54,20 +105,8 @@ SafetyDecision SafetySupervisor::apply(const SafetyInput& in) const {
     d.action = SafetyAction::Pass;
     return d;
   }
-  // Look as far ahead along the arc as braking from this command needs.
-  const double av = std::abs(c.v), aw = std::abs(c.w);
-  const double m = std::max(av / r_.acc_v, aw / r_.acc_w);  // stop time at full command
-  const double margin_t = av > 0 ? r_.safe_distance / av : 0.0;
-  const double horizon = m / 2 + margin_t + p_.sim_step;
-  const double ttc = timeToCollision(*in.map, in.pose, c, horizon);
-  double s = 1;
-  if (std::isfinite(ttc)) {
-    // Braking from s (v, w) covers the arc of s^2 m / 2 seconds at the full
-    // command; it must end margin_t before the contact: s^2 <= 2 (ttc - margin_t) / m.
-    // One rollout step less: the contact time is only known to a step.
-    const double room = ttc - margin_t - p_.sim_step / 2;
-    s = room <= 0 ? 0.0 : std::min(1.0, std::sqrt(2 * room / m));
-  }
+  const double margin = in.plan.margin >= 0 ? in.plan.margin : r_.safe_distance;
+  const double s = brakingScale(*in.map, in.pose, c, r_, p_.sim_step, margin);
   if (s <= 1e-3) return stop("cannot brake before the obstacle ahead");
   d.cmd = {c.v * s, c.w * s};
   d.action = s < 1 ? SafetyAction::Slow : SafetyAction::Pass;

@@ -82,9 +82,9 @@ Scenario parseScenario(const std::string& text, const std::string& origin,
   const Node root = yaml::parse(text, origin);
   if (root.kind != Node::Kind::Map) r.fail(root, "a scenario is a map of keys");
   static const std::set<std::string> known = {
-      "format",    "name",        "world",          "profile",      "plugin",   "start",
-      "goal",      "intent",      "intent_heading", "heading_gain", "duration", "reach",
-      "forbidden", "path_exists", "seed",           "places",       "end"};
+      "format",    "name",        "world",          "profile",      "plugin",     "start",
+      "goal",      "intent",      "intent_heading", "heading_gain", "duration",   "reach",
+      "forbidden", "path_exists", "seed",           "places",       "user_speed", "end"};
   for (size_t i = 0; i < root.map.size(); ++i)
     if (!known.count(root.map[i].first))
       throw InputError(origin + ":" + std::to_string(root.key_lines[i]) + ": unknown key '" +

@@ -139,6 +139,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     throw InputError(sc.file + ": the start pose puts the robot on an obstacle of the world");
 
   Navigator navigator(nav, robot);
+  navigator.setRecoveryParams(prof.section<RecoveryParams>("nav.recovery"));
   const bool walker = navigator.planner().needsUserIntent();
   std::optional<TPose2D> goal = sc.goal;
   std::string goal_label;
@@ -180,12 +181,23 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   std::optional<Route> route;
   const Footprint fp(robot.footprint, nav.resolution);
   std::unique_ptr<GlobalPlanner> gp;
+  NavigationParams route_nav = nav;  // the route's clearance (narrowed when nothing else fits)
   if (goal_mode) {
     gp = std::make_unique<GlobalPlanner>(world->grid(), fp.inscribed, nav);
-    try {
-      route = gp->plan({sc.start.x, sc.start.y}, {goal->x, goal->y});
-    } catch (const InputError& e) {  // a start or goal off the map: the scenario's fault
-      throw InputError(sc.file + ": " + e.what());
+    auto planRoute = [&] {
+      try {
+        return gp->plan({sc.start.x, sc.start.y}, {goal->x, goal->y});
+      } catch (const InputError& e) {  // a start or goal off the map: the scenario's fault
+        throw InputError(sc.file + ": " + e.what());
+      }
+    };
+    route = planRoute();
+    if (!route && route_nav.plan_clearance > route_nav.footprint_padding) {
+      // No way with plan_clearance to spare: a passage the footprint fits
+      // with its padding is taken (and replanned routes may use it too).
+      route_nav.plan_clearance = route_nav.footprint_padding;
+      gp = std::make_unique<GlobalPlanner>(world->grid(), fp.inscribed, route_nav);
+      route = planRoute();
     }
     if (route) navigator.setRoute(withStart({sc.start.x, sc.start.y}, route->waypoints), *goal);
     if (!loc_sensor.empty()) {
@@ -204,7 +216,8 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   double clear_sum = 0, fid_sum = 0, cycle_ms_sum = 0;
   size_t fid_n = 0;
   m.min_clearance_m = std::numeric_limits<double>::infinity();
-  bool reached = false, goal_reached = false;
+  bool reached = false, goal_reached = false, left_map = false;
+  std::string gave_up;
   const double duration = o.duration ? *o.duration : sc.duration;
   double t_end = duration;
   std::optional<InputError> input_error;  // a live source's bad message: outputs first
@@ -214,7 +227,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     fs::create_directories(o.out_dir);
     log.open(fs::path(o.out_dir) / "navlog.csv");
     log << "t,truth_x,truth_y,truth_yaw,est_x,est_y,est_yaw,user_v,user_w,plan_v,plan_w,cmd_v,"
-           "cmd_w,action,reason,clearance_m,obstacle_cells,planner_note\n";
+           "cmd_w,action,reason,clearance_m,obstacle_cells,planner_note,collision,recovery\n";
   }
   const auto wall0 = std::chrono::steady_clock::now();
   const bool tty = o.progress && isatty(fileno(stderr));
@@ -224,6 +237,9 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
                            ? static_cast<size_t>(std::ceil(duration / dt - 1e-9))
                            : std::numeric_limits<size_t>::max();
   RouteReplanner replanner(o.control_rate);
+  size_t recovery_cycles = 0;
+  std::string last_recovery;
+  bool collision_end = false;
   TPoint2D route_start{sc.start.x, sc.start.y};
   for (size_t k = 0; k < steps; ++k) {
     if (o.stop && o.stop->load()) break;
@@ -370,6 +386,15 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     truth_path.push_back({truth.x, truth.y});
     for (const auto& poly : sc.forbidden)
       if (places::pointInPolygon(poly, truth.x, truth.y)) m.entered_forbidden = true;
+    // Off the world's map: the run is a failure.
+    {
+      const int cx = world->cellX(truth.x), cy = world->cellY(truth.y);
+      if (!world->inside(cx, cy)) left_map = true;
+    }
+    const bool collided_now = sim.collided();
+    if (!cyc.recovery.empty()) ++recovery_cycles;
+    if (!cyc.recovery.empty() && last_recovery.empty()) ++m.recoveries;
+    last_recovery = cyc.recovery;
     if (sc.reach &&
         std::hypot(truth.x - sc.reach->first.x, truth.y - sc.reach->first.y) <= sc.reach->second)
       reached = true;
@@ -387,7 +412,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
           << fmt(cyc.plan.cmd.v) << "," << fmt(cyc.plan.cmd.w, 4) << "," << fmt(cyc.decision.cmd.v)
           << "," << fmt(cyc.decision.cmd.w, 4) << "," << safetyActionName(cyc.decision.action)
           << ",\"" << cyc.decision.reason << "\"," << fmt(cl) << "," << cyc.obstacles << ",\""
-          << cyc.plan.note << "\"\n";
+          << cyc.plan.note << "\"," << (collided_now ? 1 : 0) << "," << cyc.recovery << "\n";
     }
     if (tty && k % (o.speed > 0 ? 2 : 20) == 0) {
       // The status line.
@@ -404,15 +429,26 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
       t_end = t;
       break;
     }
+    // The first collision ends the run (unless asked to go on).
+    if (sim.collisions() > 0 && !o.continue_after_collision) {
+      t_end = t;
+      collision_end = true;
+      break;
+    }
+    if (cyc.gave_up) {
+      gave_up = cyc.plan.note;
+      t_end = t;
+      break;
+    }
     // Replan from the localised pose with the obstacles the robot has seen
     // marked on the map (boxes and people the map does not show; when that
     // finds no route, the last one stays). A walker's scripted user walks
     // the new route too: a user sees boxes and people.
-    if (goal_mode && gp && replanner.due(k, !navigator.predicted().empty())) {
+    if (goal_mode && gp && (cyc.replan || replanner.due(k, !navigator.predicted().empty()))) {
       const TPose2D mp = navigator.mapPose();
       if (auto r2 = replanner.step(!navigator.predicted().empty(), world->grid(),
                                    navigator.obstaclesInMap(), {mp.x, mp.y}, {goal->x, goal->y},
-                                   route, fp.inscribed, fp.circumscribed + 0.2, nav)) {
+                                   route, fp.inscribed, fp.circumscribed + 0.2, route_nav)) {
         route = r2;
         route_start = {mp.x, mp.y};
         navigator.setRoute(withStart({mp.x, mp.y}, route->waypoints), *goal);
@@ -422,7 +458,10 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   if (tty) std::cerr << "\n";
   m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   m.collisions = sim.collisions();
-  m.duration_s = goal_reached || intent_over ? t_end : sim.time();
+  m.duration_s =
+      goal_reached || intent_over || collision_end || !gave_up.empty() ? t_end : sim.time();
+  m.recovery_cycles = recovery_cycles;
+  m.left_map = left_map;
   m.path_length_m = sim.distance();
   m.mean_speed_mps = m.duration_s > 0 ? m.path_length_m / m.duration_s : 0;
   m.mean_clearance_m = m.cycles ? clear_sum / m.cycles : 0;
@@ -432,22 +471,31 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   m.intent_fidelity = fid_n ? fid_sum / fid_n : std::numeric_limits<double>::quiet_NaN();
   const sim::Pose2 end = sim.groundTruth();
   if (goal_mode) m.final_goal_error_m = std::hypot(end.x - goal->x, end.y - goal->y);
+  // At the goal means at the goal in truth, at the end: the robot's own
+  // "goal reached" (from its localisation) is not enough.
+  const bool at_goal = goal_mode && goal_reached && m.final_goal_error_m <= nav.goal_tolerance;
 
   // Outcome.
   if (m.collisions > 0)
     m.outcome = std::to_string(m.collisions) + " collision(s)";
   else if (m.entered_forbidden)
     m.outcome = "entered a forbidden region";
+  else if (left_map)
+    m.outcome = "left the map";
+  else if (!gave_up.empty())
+    m.outcome = gave_up;
   else if (goal_mode && !route)
     m.outcome = sc.path_exists ? "no route to the goal" : "no route (as expected)";
   else if (goal_mode && !goal_reached)
     m.outcome = "goal not reached in " + fmt(duration, 0) + " s";
+  else if (goal_mode && !at_goal && route)
+    m.outcome = "reported the goal reached " + fmt(m.final_goal_error_m, 2) + " m from it";
   else if (sc.reach && !o.intent && !reached)
     m.outcome = "did not reach the target region";
   else
     m.outcome = goal_mode ? "goal reached" : "ok";
-  m.success = m.collisions == 0 && !m.entered_forbidden &&
-              (goal_mode ? (goal_reached || (!route && !sc.path_exists)) : true) &&
+  m.success = m.collisions == 0 && !m.entered_forbidden && !left_map && gave_up.empty() &&
+              (goal_mode ? (at_goal || (!route && !sc.path_exists)) : true) &&
               (!sc.reach || o.intent || reached);  // a live user goes where they like
 
   if (!o.out_dir.empty()) {
@@ -524,6 +572,9 @@ std::string RunMetrics::toJson() const {
   else
     j.key("intent_fidelity").value(intent_fidelity);
   j.key("final_goal_error_m").value(final_goal_error_m);
+  j.key("recoveries").value(static_cast<uint64_t>(recoveries));
+  j.key("recovery_cycles").value(static_cast<uint64_t>(recovery_cycles));
+  j.key("left_map").value(left_map);
   j.key("cycles").value(static_cast<uint64_t>(cycles));
   j.key("stops").value(static_cast<uint64_t>(stops));
   j.key("slowed").value(static_cast<uint64_t>(slowed));

@@ -77,6 +77,10 @@ struct PlannerOutput {
   bool ok = false;  ///< false: no admissible trajectory (the supervisor stops)
   Twist cmd;
   std::string note;  ///< why not ok, or what it did ("turn in place")
+  /** m, the margin the supervisor keeps before a contact for this command
+   *  (its braking rule); negative: the robot's safe_distance. A recovery's
+   *  crawl out of a wedge asks for its smaller backup_margin. */
+  double margin = -1;
   size_t evaluated = 0, admissible = 0;
   std::vector<Trajectory> trajectories;  ///< every candidate (for pictures and tests)
 };

@@ -8,6 +8,7 @@
 #include <carenav/navigation/local_planner.h>
 #include <carenav/navigation/moving_tracker.h>
 #include <carenav/navigation/navigation_params.h>
+#include <carenav/navigation/recovery.h>
 #include <carenav/navigation/safety.h>
 
 #include <mrpt/obs/CObservation.h>
@@ -61,6 +62,11 @@ class Navigator {
   void setRotateRequest(bool on) { rotate_request_ = on; }
   bool rotateRequested() const { return rotate_request_; }
 
+  /** The recovery behaviours of a goal robot ([nav.recovery]; defaults
+   *  otherwise). A walker's user drives: no recovery. */
+  void setRecoveryParams(const RecoveryParams& p);
+  const Recovery& recovery() const { return recovery_; }
+
   /** Goal navigation: a route (map frame) ending at the goal. */
   void setRoute(const std::vector<TPoint2D>& waypoints, const TPose2D& goal);
   void clearRoute();
@@ -73,6 +79,9 @@ class Navigator {
     double clearance = 0;       ///< m, footprint clearance now (capped at 2 m)
     bool goal_reached = false;  ///< within the goal tolerances and stopped by the planner
     size_t obstacles = 0;       ///< remembered obstacle cells
+    std::string recovery;       ///< the recovery under way ("back out", "turn", "wait"), or ""
+    bool gave_up = false;       ///< the recoveries did not help: the robot stops for good
+    bool replan = false;        ///< a recovery ended: plan the route again now
   };
   Cycle cycle(double now);
 
@@ -126,6 +135,8 @@ class Navigator {
   std::vector<TPoint2D> route_;
   std::optional<TPose2D> goal_;
   bool rotate_request_ = false;
+  Recovery recovery_;
+  bool blocked_ = false;  // the last cycle held the robot (no plan, or stopped)
 };
 
 }  // namespace carenav::navigation

@@ -11,6 +11,21 @@
 
 namespace carenav::navigation {
 
+/** The supervisor's braking rule as a number (rule 5), shared with the
+ *  planners and the recovery behaviours so that what they propose is what
+ *  the supervisor passes: the factor s in [0, 1] by which (v, w) must be
+ *  scaled, keeping the curvature, so that braking at the robot's limits
+ *  along the arc ends `safe_distance` before the first contact (or the
+ *  edge of the map) on `map` (`margin` instead of safe_distance when given), with contacts found
+ * every `step` / 2 seconds and known to one such step. 1: passes unchanged; 0: must stop. */
+double brakingScale(const LocalCostmap& map, const TPose2D& pose, const Twist& cmd,
+                    const RobotParams& robot, double step, double margin);
+/** The same with the robot's safe_distance as the margin. */
+inline double brakingScale(const LocalCostmap& map, const TPose2D& pose, const Twist& cmd,
+                           const RobotParams& robot, double step) {
+  return brakingScale(map, pose, cmd, robot, step, robot.safe_distance);
+}
+
 struct SafetyInput {
   double now = 0;                        ///< s
   std::optional<double> last_scan_time;  ///< s, newest obstacle data (none yet: stale)

@@ -86,6 +86,9 @@ struct RunMetrics {
   double final_goal_error_m = 0;               ///< goal scenarios
   double wall_seconds = 0;
   bool entered_forbidden = false;
+  bool left_map = false;       ///< the true centre went off the world's map (or onto unknown)
+  size_t recoveries = 0;       ///< recovery behaviours started (goal robots)
+  size_t recovery_cycles = 0;  ///< control cycles spent in them
   std::vector<std::string> outputs;
   std::string toJson() const;
   /** Lists run.png (`png`, written by the caller) and navlog.csv of
@@ -115,6 +118,9 @@ struct RunOptions {
   /** Overrides the scenario's duration (s); infinity runs until the intent
    *  source finishes or `stop` is set. */
   std::optional<double> duration;
+  /** The first collision ends the run (the bumper's contact); true: the
+   *  run goes on and counts them all (it fails either way). */
+  bool continue_after_collision = false;
   /** Set (e.g. by SIGINT) to end the run early; outputs are still written. */
   const std::atomic<bool>* stop = nullptr;
 };

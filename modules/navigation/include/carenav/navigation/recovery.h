@@ -1,0 +1,106 @@
+// Recovery behaviours around every goal plugin: when the robot is boxed in
+// (no admissible trajectory, or the supervisor keeps stopping it) or makes
+// no progress along its route, it backs out along the way it came (the
+// recent path is known free), else turns on the spot where the footprint
+// can, else waits; then the planner resumes on a fresh route. After
+// `max_attempts` recoveries without progress it gives up, with the reason.
+// Nav2's behaviour-tree recoveries (back up, spin, wait, replan) are the
+// model; the order is the supervisor's order of safety.
+#pragma once
+
+#include <carenav/common/params.h>
+#include <carenav/common/robot.h>
+#include <carenav/navigation/local_map.h>
+#include <carenav/navigation/local_planner.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace carenav::navigation {
+
+/** [nav.recovery]: when a goal robot counts as stuck and how it recovers. */
+struct RecoveryParams {
+  bool enabled = true;             ///< off: the planner alone (a stuck robot stays stuck)
+  double stuck_time = 1.0;         ///< s, blocked (no admissible trajectory, stopped) this long
+  double progress_time = 10.0;     ///< s, ... or the route left has not shrunk for this long
+  double progress_distance = 0.3;  ///< m, ... by this much
+  double backup_distance = 0.4;    ///< m, backed out along the recent path per attempt
+  double backup_speed = 0.2;       ///< m/s, reversing speed (at most the robot's -v_min)
+  double backup_margin = 0.03;  ///< m, the supervisor's margin for these crawls (not safe_distance)
+  double path_corridor = 0.1;   ///< m, reversing stays this close to the recorded path
+  double spin_deg = 90;         ///< deg, most a spin turns per attempt
+  double wait_time = 1.0;       ///< s, waiting when neither backing out nor turning is free
+  int max_attempts = 6;         ///< recoveries without progress before giving up
+  double path_memory = 3.0;     ///< m, of the robot's own recent path kept
+  static const ParamTable<RecoveryParams>& table();
+};
+
+/** The recovery state machine (odometry frame). Tested alone in
+ *  tests/unit/navigation/test_recovery.cpp. */
+class Recovery {
+ public:
+  enum class Phase { Idle, BackUp, Spin, Wait, GaveUp };
+  Recovery(const RecoveryParams& p, const RobotParams& robot, const NavigationParams& nav);
+
+  /** The robot's pose each cycle (its recent path: known free). */
+  void recordPose(const TPose2D& pose);
+  /** One cycle: `plan` is the planner's answer, `blocked` whether the
+   *  robot was held (planner found nothing or the supervisor stopped it),
+   *  `route_left` the route length still to go (m). Returns the command to
+   *  use instead of the plan while a recovery runs (or after giving up). */
+  std::optional<PlannerOutput> step(double now, const PlannerInput& in, const PlannerOutput& plan,
+                                    bool blocked, double route_left);
+  /** A fresh route (replanned): progress is measured on it from now. */
+  void routeChanged(double now);
+
+  /** The command that backs out along the recorded path from `pose`
+   *  (reversing when the way back lies behind, forwards when the robot has
+   *  turned to face it), when it is admissible: the supervisor passes it
+   *  unchanged (brakingScale 1: braking at the robot's limits ends
+   *  safe_distance before any obstacle of `map`) and the poses it sweeps
+   *  until it could stop stay within path_corridor of the recorded path. */
+  std::optional<Twist> backOutCommand(const LocalCostmap& map, const TPose2D& pose) const;
+  /** True when moving at `cmd` (v != 0) from `pose` is admissible (see above). */
+  bool reverseAdmissible(const LocalCostmap& map, const TPose2D& pose, const Twist& cmd) const;
+
+  Phase phase() const { return phase_; }
+  static const char* phaseName(Phase p);
+  size_t recoveries() const { return recoveries_; }
+  bool gaveUp() const { return phase_ == Phase::GaveUp; }
+  const std::string& reason() const { return reason_; }
+  /** True once after each recovery: the route should be planned again. */
+  bool takeReplanRequest() {
+    const bool r = replan_;
+    replan_ = false;
+    return r;
+  }
+  const std::vector<TPose2D>& path() const { return path_; }
+
+ private:
+  void start(double now, const PlannerInput& in, const std::string& why);
+  void finish(double now);
+  PlannerOutput command(const Twist& cmd, const std::string& note) const;
+  std::optional<Twist> spinCommand(const PlannerInput& in) const;
+  size_t nearestIndex(const TPose2D& pose) const;
+
+  RecoveryParams p_;
+  RobotParams r_;
+  NavigationParams nav_;
+  std::vector<TPose2D> path_;  // oldest first
+  Phase phase_ = Phase::Idle;
+  std::string reason_;
+  size_t recoveries_ = 0;
+  int attempts_ = 0;  // since the last progress
+  bool replan_ = false;
+  std::optional<double> blocked_since_;
+  double best_left_ = 0, best_t_ = 0;
+  bool have_best_ = false;
+  // current recovery
+  double phase_t0_ = 0;
+  TPose2D phase_pose_;
+  double backed_ = 0, spun_ = 0, spin_dir_ = 0;
+  TPose2D last_pose_;
+};
+
+}  // namespace carenav::navigation

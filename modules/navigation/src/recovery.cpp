@@ -1,0 +1,337 @@
+// Recovery behaviours (docs/navigate.md, "Recovery"): back out along the
+// recent path, turn on the spot, wait; then replan. Nav2's recoveries
+// (back up, spin, wait) are the model.
+#include <carenav/navigation/recovery.h>
+#include <carenav/navigation/safety.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace carenav::navigation {
+
+namespace {
+
+double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
+
+/** Distance from (x, y) to the polyline of the poses' positions. */
+double distanceToPoses(const std::vector<TPose2D>& path, double x, double y) {
+  if (path.empty()) return std::numeric_limits<double>::infinity();
+  if (path.size() == 1) return std::hypot(path[0].x - x, path[0].y - y);
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i + 1 < path.size(); ++i) {
+    const auto& a = path[i];
+    const auto& b = path[i + 1];
+    const double vx = b.x - a.x, vy = b.y - a.y, l2 = vx * vx + vy * vy;
+    const double u = l2 > 0 ? std::clamp(((x - a.x) * vx + (y - a.y) * vy) / l2, 0.0, 1.0) : 0;
+    best = std::min(best, std::hypot(a.x + u * vx - x, a.y + u * vy - y));
+  }
+  return best;
+}
+
+/** Spacing of the recorded path's points (m). */
+constexpr double kPathSpacing = 0.03;
+/** Pure-pursuit look-ahead when backing out along the recorded path (m). */
+constexpr double kBackLookahead = 0.3;
+
+}  // namespace
+
+const ParamTable<RecoveryParams>& RecoveryParams::table() {
+  using P = RecoveryParams;
+  static const auto t =
+      ParamTable<P>()
+          .flag("enabled", &P::enabled,
+                "goal robots recover when boxed in or making no progress (back out, turn, wait, "
+                "replan; give up after max_attempts); off: the planner alone")
+          .real("stuck_time", &P::stuck_time, "s", 0.1, 60,
+                "boxed in: no admissible trajectory, or stopped by the supervisor, this long")
+          .real("progress_time", &P::progress_time, "s", 1, 600,
+                "no progress: the route left has not shrunk by progress_distance for this long")
+          .real("progress_distance", &P::progress_distance, "m", 0.01, 10,
+                "shrinking of the route left that counts as progress")
+          .real("backup_distance", &P::backup_distance, "m", 0.05, 5,
+                "backed out along the recent path per attempt (times the attempt, at most 3)")
+          .real("backup_speed", &P::backup_speed, "m/s", 0.01, 2,
+                "reversing speed (at most the robot's -v_min; a robot with v_min = 0 does not "
+                "reverse)")
+          .real("backup_margin", &P::backup_margin, "m", 0, 1,
+                "the supervisor's margin before a contact for recovery moves (a crawl out of a "
+                "wedge), instead of the robot's safe_distance; a command is used only when the "
+                "supervisor passes it unchanged")
+          .real("path_corridor", &P::path_corridor, "m", 0.01, 1,
+                "reversing stays this close to the recorded path (known free)")
+          .real("spin_deg", &P::spin_deg, "deg", 1, 360,
+                "most a turn on the spot turns per attempt (towards the route)")
+          .real("wait_time", &P::wait_time, "s", 0, 60,
+                "waiting when neither backing out nor turning is free")
+          .integer("max_attempts", &P::max_attempts, "", 1, 1000,
+                   "recoveries without progress before giving up")
+          .real("path_memory", &P::path_memory, "m", 0.1, 50,
+                "length of the robot's recent path kept for backing out");
+  return t;
+}
+
+Recovery::Recovery(const RecoveryParams& p, const RobotParams& robot, const NavigationParams& nav)
+    : p_(p), r_(robot), nav_(nav) {}
+
+const char* Recovery::phaseName(Phase p) {
+  switch (p) {
+    case Phase::Idle:
+      return "";
+    case Phase::BackUp:
+      return "back out";
+    case Phase::Spin:
+      return "turn";
+    case Phase::Wait:
+      return "wait";
+    case Phase::GaveUp:
+      return "gave up";
+  }
+  return "?";
+}
+
+void Recovery::recordPose(const TPose2D& pose) {
+  if (phase_ == Phase::BackUp) return;  // retracing: the path is cut when backing ends
+  if (!path_.empty() && std::hypot(pose.x - path_.back().x, pose.y - path_.back().y) < kPathSpacing)
+    return;
+  path_.push_back(pose);
+  // keep path_memory metres
+  double len = 0;
+  size_t keep = 0;
+  for (size_t i = path_.size() - 1; i > 0; --i) {
+    len += std::hypot(path_[i].x - path_[i - 1].x, path_[i].y - path_[i - 1].y);
+    if (len > p_.path_memory) {
+      keep = i - 1;
+      break;
+    }
+  }
+  if (keep > 0) path_.erase(path_.begin(), path_.begin() + static_cast<std::ptrdiff_t>(keep));
+}
+
+size_t Recovery::nearestIndex(const TPose2D& pose) const {
+  size_t best = 0;
+  double bd = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < path_.size(); ++i) {
+    const double d = std::hypot(path_[i].x - pose.x, path_[i].y - pose.y);
+    if (d <= bd) bd = d, best = i;  // ties: the newest
+  }
+  return best;
+}
+
+bool Recovery::reverseAdmissible(const LocalCostmap& map, const TPose2D& pose,
+                                 const Twist& cmd) const {
+  if (cmd.v == 0 || cmd.v < r_.v_min - 1e-9 || cmd.v > r_.v_max + 1e-9 || path_.size() < 2)
+    return false;
+  // The supervisor's rule, unchanged: the command passes without slowing.
+  if (brakingScale(map, pose, cmd, r_, nav_.sim_step, p_.backup_margin) < 1.0) return false;
+  // ... and the poses it sweeps until it could stop (one cycle, braking and
+  // the safe distance) stay on the way the robot came.
+  const double u = std::abs(cmd.v);
+  const double dist = u * 2 * nav_.sim_step + u * u / (2 * r_.acc_v) + p_.backup_margin;
+  const double horizon = dist / u;
+  const double step = nav_.sim_step / 2;
+  for (double t = step; t <= horizon + 1e-9; t += step) {
+    const TPose2D q = integrateArc(pose, cmd.v, cmd.w, t);
+    if (distanceToPoses(path_, q.x, q.y) > p_.path_corridor) return false;
+  }
+  return true;
+}
+
+std::optional<Twist> Recovery::backOutCommand(const LocalCostmap& map, const TPose2D& pose) const {
+  if (path_.size() < 2) return std::nullopt;
+  const size_t i = nearestIndex(pose);
+  if (i == 0) return std::nullopt;  // at the oldest point: nothing left behind
+  // the point kBackLookahead metres back along the recorded path
+  double left = kBackLookahead;
+  TPoint2D target{path_[0].x, path_[0].y};
+  TPoint2D prev{pose.x, pose.y};
+  for (size_t k = i + 1; k-- > 0;) {
+    const double d = std::hypot(path_[k].x - prev.x, path_[k].y - prev.y);
+    if (d >= left) {
+      target = {prev.x + (path_[k].x - prev.x) * left / d,
+                prev.y + (path_[k].y - prev.y) * left / d};
+      break;
+    }
+    left -= d;
+    prev = {path_[k].x, path_[k].y};
+  }
+  const double L = std::hypot(target.x - pose.x, target.y - pose.y);
+  if (L < 0.02) return std::nullopt;
+  const double bearing = std::atan2(target.y - pose.y, target.x - pose.x);
+  // Pure pursuit along the way back: reversing when it lies behind (the
+  // rear is the heading plus pi), forwards when the robot has turned to
+  // face it.
+  const double a_rear = angleDiff(bearing, pose.phi + M_PI);
+  const bool reverse = std::abs(a_rear) <= M_PI / 2;
+  const double u =
+      reverse ? std::min(p_.backup_speed, -r_.v_min) : std::min(p_.backup_speed, r_.v_max);
+  if (!(u > 0)) return std::nullopt;
+  const double alpha = reverse ? a_rear : angleDiff(bearing, pose.phi);
+  const double sgn = reverse ? -1.0 : 1.0;
+  const double w = std::clamp(2 * u * std::sin(alpha) / L, -r_.w_max, r_.w_max);
+  for (const Twist c : {Twist{sgn * u, w}, Twist{sgn * u, 0.0}, Twist{sgn * u / 2, w / 2}}) {
+    if (reverseAdmissible(map, pose, c)) return c;
+  }
+  return std::nullopt;
+}
+
+std::optional<Twist> Recovery::spinCommand(const PlannerInput& in) const {
+  if (!in.map) return std::nullopt;
+  double err = 0;
+  if (!in.path.empty()) {
+    const TPoint2D t = lookaheadPoint(in.path, in.pose.x, in.pose.y, nav_.lookahead);
+    err = angleDiff(std::atan2(t.y - in.pose.y, t.x - in.pose.x), in.pose.phi);
+  } else if (in.goal) {
+    err = angleDiff(std::atan2(in.goal->y - in.pose.y, in.goal->x - in.pose.x), in.pose.phi);
+  }
+  const double w = 0.5 * r_.w_max;
+  const double dir0 = spin_dir_ != 0 ? spin_dir_ : (err >= 0 ? 1.0 : -1.0);
+  const double angle =
+      std::min(mrpt::DEG2RAD(20.0), std::min(mrpt::DEG2RAD(p_.spin_deg), M_PI) - spun_);
+  if (angle <= 0) return std::nullopt;
+  for (const double dir : {dir0, -dir0}) {
+    if (spin_dir_ != 0 && dir != spin_dir_) break;  // a turn keeps its direction
+    const Twist cmd{0, dir * w};
+    const Trajectory tr = rollout(*in.map, in.pose, cmd, angle / w, nav_.sim_step / 2, 0.0);
+    if (tr.admissible() &&
+        brakingScale(*in.map, in.pose, cmd, r_, nav_.sim_step, p_.backup_margin) >= 1.0)
+      return cmd;
+  }
+  return std::nullopt;
+}
+
+PlannerOutput Recovery::command(const Twist& cmd, const std::string& note) const {
+  PlannerOutput o;
+  o.ok = true;
+  o.cmd = cmd;
+  o.note = note;
+  o.margin = p_.backup_margin;
+  return o;
+}
+
+void Recovery::routeChanged(double now) {
+  have_best_ = false;
+  best_t_ = now;
+}
+
+void Recovery::start(double now, const PlannerInput& in, const std::string& why) {
+  ++recoveries_;
+  ++attempts_;
+  reason_ = why;
+  phase_t0_ = now;
+  last_pose_ = in.pose;
+  backed_ = spun_ = spin_dir_ = 0;
+  blocked_since_.reset();
+  if (in.map && backOutCommand(*in.map, in.pose)) {
+    phase_ = Phase::BackUp;
+  } else if (auto s = spinCommand(in)) {
+    phase_ = Phase::Spin;
+    spin_dir_ = s->w > 0 ? 1.0 : -1.0;
+  } else {
+    phase_ = Phase::Wait;
+  }
+}
+
+void Recovery::finish(double now) {
+  if (phase_ == Phase::BackUp) {
+    // the retraced part of the path is behind no more
+    const size_t i = nearestIndex(last_pose_);
+    path_.resize(std::min(path_.size(), i + 1));
+  }
+  phase_ = Phase::Idle;
+  replan_ = true;
+  best_t_ = now;  // the planner gets a fresh window
+  blocked_since_.reset();
+}
+
+std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
+                                            const PlannerOutput& plan, bool blocked,
+                                            double route_left) {
+  if (!p_.enabled) return std::nullopt;
+  if (phase_ == Phase::GaveUp) {
+    PlannerOutput o;
+    o.note = "gave up: " + reason_;
+    return o;
+  }
+  // Progress along the route (near the goal: turning to its heading is progress).
+  if (!have_best_ || route_left < best_left_ - p_.progress_distance ||
+      route_left < nav_.goal_tolerance) {
+    if (have_best_ && route_left < best_left_ - p_.progress_distance) attempts_ = 0;
+    best_left_ = route_left;
+    best_t_ = now;
+    have_best_ = true;
+  }
+  if (phase_ == Phase::Idle) {
+    if (plan.ok && plan.note == "goal reached") return std::nullopt;
+    if (blocked) {
+      if (!blocked_since_) blocked_since_ = now;
+    } else {
+      blocked_since_.reset();
+    }
+    std::string why;
+    if (blocked_since_ && now - *blocked_since_ >= p_.stuck_time)
+      why = "boxed in";
+    else if (now - best_t_ >= p_.progress_time)
+      why = "no progress";
+    if (why.empty()) return std::nullopt;
+    if (attempts_ >= p_.max_attempts) {
+      phase_ = Phase::GaveUp;
+      reason_ = why + " after " + std::to_string(attempts_) + " recoveries";
+      PlannerOutput o;
+      o.note = "gave up: " + reason_;
+      return o;
+    }
+    start(now, in, why);
+  }
+  // The recovery under way.
+  if (phase_ == Phase::BackUp) {
+    backed_ += std::hypot(in.pose.x - last_pose_.x, in.pose.y - last_pose_.y);
+    last_pose_ = in.pose;
+    const double target = p_.backup_distance * std::min(attempts_, 3);
+    std::optional<Twist> c;
+    if (backed_ < target && in.map) c = backOutCommand(*in.map, in.pose);
+    if (c) return command(*c, "recovery (" + reason_ + "): back out");
+    if (backed_ < 0.05) {
+      // could not back out after all: turn or wait instead
+      if (auto s = spinCommand(in)) {
+        phase_ = Phase::Spin;
+        spin_dir_ = s->w > 0 ? 1.0 : -1.0;
+      } else {
+        phase_ = Phase::Wait;
+        phase_t0_ = now;
+      }
+    } else {
+      finish(now);
+      return command({0, 0}, "recovery (" + reason_ + "): backed out, replanning");
+    }
+  }
+  if (phase_ == Phase::Spin) {
+    spun_ += std::abs(angleDiff(in.pose.phi, last_pose_.phi));
+    last_pose_ = in.pose;
+    double err = 0;
+    if (!in.path.empty()) {
+      const TPoint2D t = lookaheadPoint(in.path, in.pose.x, in.pose.y, nav_.lookahead);
+      err = angleDiff(std::atan2(t.y - in.pose.y, t.x - in.pose.x), in.pose.phi);
+    }
+    std::optional<Twist> c;
+    if (std::abs(err) > mrpt::DEG2RAD(15.0) || spun_ < 0.05) c = spinCommand(in);
+    if (c) return command(*c, "recovery (" + reason_ + "): turn");
+    if (spun_ < 0.05) {
+      phase_ = Phase::Wait;
+      phase_t0_ = now;
+    } else {
+      finish(now);
+      return command({0, 0}, "recovery (" + reason_ + "): turned, replanning");
+    }
+  }
+  if (phase_ == Phase::Wait) {
+    if (now - phase_t0_ >= p_.wait_time) {
+      finish(now);
+      return command({0, 0}, "recovery (" + reason_ + "): waited, replanning");
+    }
+    return command({0, 0}, "recovery (" + reason_ + "): wait");
+  }
+  return std::nullopt;
+}
+
+}  // namespace carenav::navigation

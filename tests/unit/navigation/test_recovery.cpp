@@ -1,0 +1,269 @@
+// Recovery behaviours (back out along the recent path, turn, wait, give
+// up), the planner and the supervisor sharing one notion of admissible, and
+// goal-dwa's turns at a fast robot's turn rate.
+#include <carenav/navigation/recovery.h>
+#include <carenav/navigation/safety.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace carenav::navigation {
+namespace {
+
+/** The clutter benchmark's robot: 0.51 x 0.43 m, 2 m/s, 4 rad/s, reverses. */
+RobotParams fastRobot() {
+  RobotParams r;
+  r.footprint = {{0.255, 0.215}, {-0.255, 0.215}, {-0.255, -0.215}, {0.255, -0.215}};
+  r.v_max = 2.0;
+  r.v_min = -0.5;
+  r.w_max = 4.0;
+  r.acc_v = 2.0;
+  r.acc_w = 4.0;
+  r.safe_distance = 0.1;
+  return r;
+}
+
+/** Obstacle points every 2 cm from a to b. */
+void segment(std::vector<TPoint2D>& out, TPoint2D a, TPoint2D b) {
+  const double l = std::hypot(b.x - a.x, b.y - a.y);
+  const int n = std::max(1, static_cast<int>(l / 0.02));
+  for (int i = 0; i <= n; ++i)
+    out.push_back({a.x + (b.x - a.x) * i / n, a.y + (b.y - a.y) * i / n});
+}
+
+/** Moves the pose by (v, w) for dt (exact arc). */
+TPose2D move(const TPose2D& p, const Twist& c, double dt) { return integrateArc(p, c.v, c.w, dt); }
+
+TEST(Recovery, BacksOutOfADeadEndAlongTheWayItCame) {
+  // A 0.6 m wide dead end: the robot drove in along y = 0 and faces its
+  // end wall 8 cm ahead; turning sweeps its corners into the side walls.
+  NavigationParams nav;
+  const RobotParams r = fastRobot();
+  RecoveryParams rp;
+  Recovery rec(rp, r, nav);
+  std::vector<TPoint2D> obs;
+  segment(obs, {-3, 0.3}, {0.4, 0.3});
+  segment(obs, {-3, -0.3}, {0.4, -0.3});
+  segment(obs, {0.35, -0.3}, {0.35, 0.3});
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, obs);
+  for (double x = -2.0; x <= 0.0 + 1e-9; x += 0.02) rec.recordPose({x, 0, 0});
+  PlannerInput in;
+  in.map = &map;
+  in.pose = {0, 0, 0};
+  in.path = {{-2, 0}, {0, 0}, {0, 2}};  // the route goes where the wall is
+  PlannerOutput blocked;
+  blocked.note = "no admissible trajectory";
+  double t = 0;
+  // Not yet: blocked for less than stuck_time.
+  EXPECT_FALSE(rec.step(t, in, blocked, true, 5.0));
+  size_t reversing = 0;
+  double min_x = 0;
+  for (int k = 0; k < 100; ++k) {
+    t += 0.1;
+    const auto o = rec.step(t, in, blocked, true, 5.0);
+    if (!o) continue;
+    ASSERT_TRUE(o->ok) << o->note;
+    if (o->cmd.v < 0) {
+      ++reversing;
+      // Never into an obstacle: the supervisor passes it unchanged.
+      EXPECT_GE(brakingScale(map, in.pose, o->cmd, r, nav.sim_step, rp.backup_margin), 1.0);
+      SafetyInput s;
+      s.now = t;
+      s.last_scan_time = s.last_odom_time = t;
+      s.plan = *o;
+      s.pose = in.pose;
+      s.map = &map;
+      EXPECT_EQ(SafetySupervisor(nav, r).apply(s).action, SafetyAction::Pass);
+    }
+    in.pose = move(in.pose, o->cmd, 0.1);
+    EXPECT_FALSE(map.check(in.pose).collision) << "t " << t;
+    min_x = std::min(min_x, in.pose.x);
+    if (rec.takeReplanRequest()) break;
+  }
+  EXPECT_GT(reversing, 0u);
+  EXPECT_LE(min_x, -rp.backup_distance + 0.05);  // backed out about backup_distance
+  EXPECT_NEAR(in.pose.y, 0, 0.05);               // along the way it came
+  EXPECT_EQ(rec.recoveries(), 1u);
+}
+
+TEST(Recovery, NeverReversesIntoAnObstacleOverRandomScenes) {
+  // Random recorded paths and random posts, some behind the robot on its
+  // way back: every back-out command passes the supervisor unchanged (it
+  // brakes backup_margin before any seen obstacle) and a post on the way
+  // back within the braking distance means no back-out at all.
+  NavigationParams nav;
+  const RobotParams r = fastRobot();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(-1, 1);
+  size_t offered = 0, refused = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    Recovery rec(RecoveryParams{}, r, nav);
+    // a path curving in towards the origin, heading along it
+    const double curv = 0.6 * U(rng);
+    TPose2D p{0, 0, 0};
+    std::vector<TPose2D> back;
+    for (int i = 0; i < 100; ++i) {
+      back.push_back(p);
+      p = move(p, {-1, -curv}, 0.02);  // walk backwards from the end
+    }
+    for (auto it = back.rbegin(); it != back.rend(); ++it) rec.recordPose(*it);
+    std::vector<TPoint2D> obs;
+    const int n = static_cast<int>(rng() % 6);
+    for (int k = 0; k < n; ++k) {
+      // posts around, behind the robot half of the time
+      const double a = (trial % 2 ? M_PI : 0) + U(rng) * M_PI / 2, d = 0.28 + std::abs(U(rng)) * 0.3;
+      obs.push_back({d * std::cos(a), d * std::sin(a)});
+    }
+    LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+    map.build({0, 0}, obs);
+    if (map.check({0, 0, 0}).collision) continue;
+    const auto c = rec.backOutCommand(map, {0, 0, 0});
+    if (!c) {
+      ++refused;
+      continue;
+    }
+    ++offered;
+    EXPECT_LT(c->v, 0);
+    EXPECT_GE(c->v, r.v_min - 1e-12);
+    const SafetySupervisor sup(nav, r);
+    const double ttc = sup.timeToCollision(map, {0, 0, 0}, *c, 30);
+    EXPECT_TRUE(canBrake(*c, ttc, r, RecoveryParams{}.backup_margin * 0.999))
+        << "trial " << trial << ": (" << c->v << ", " << c->w << ") ttc " << ttc;
+  }
+  EXPECT_GT(offered, 50u);
+  (void)refused;  // refusals are checked below, with a post right behind
+  // A post right behind, on the way back: no back-out.
+  Recovery rec(RecoveryParams{}, r, nav);
+  for (double x = -2.0; x <= 1e-9; x += 0.02) rec.recordPose({x, 0, 0});
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, {{-0.30, 0.0}});  // 4.5 cm behind the rear: less than braking + the margin
+  EXPECT_FALSE(rec.backOutCommand(map, {0, 0, 0}));
+  // ... nor for a robot that cannot reverse.
+  RobotParams fwd = r;
+  fwd.v_min = 0;
+  Recovery rec2(RecoveryParams{}, fwd, nav);
+  for (double x = -2.0; x <= 1e-9; x += 0.02) rec2.recordPose({x, 0, 0});
+  LocalCostmap empty(nav, Footprint(r.footprint, nav.resolution));
+  empty.build({0, 0}, {});
+  EXPECT_FALSE(rec2.backOutCommand(empty, {0, 0, 0}));
+}
+
+TEST(Recovery, GivesUpWithAReasonAfterMaxAttempts) {
+  NavigationParams nav;
+  const RobotParams r = fastRobot();
+  RecoveryParams rp;
+  rp.max_attempts = 2;
+  rp.wait_time = 0.5;
+  Recovery rec(rp, r, nav);
+  // Boxed in all round: no back-out (no path), no turn: it waits, then gives up.
+  std::vector<TPoint2D> obs;
+  segment(obs, {-0.3, 0.25}, {0.3, 0.25});
+  segment(obs, {-0.3, -0.25}, {0.3, -0.25});
+  segment(obs, {0.3, -0.25}, {0.3, 0.25});
+  segment(obs, {-0.3, -0.25}, {-0.3, 0.25});
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, obs);
+  PlannerInput in;
+  in.map = &map;
+  in.pose = {0, 0, 0};
+  in.path = {{0, 0}, {3, 0}};
+  PlannerOutput blocked;
+  std::optional<PlannerOutput> o;
+  for (double t = 0; t < 20 && !rec.gaveUp(); t += 0.1) {
+    o = rec.step(t, in, blocked, true, 3.0);
+    if (o && o->ok) EXPECT_EQ(o->cmd.v, 0);
+  }
+  ASSERT_TRUE(rec.gaveUp());
+  ASSERT_TRUE(o);
+  EXPECT_FALSE(o->ok);
+  EXPECT_NE(o->note.find("gave up: boxed in after 2 recoveries"), std::string::npos) << o->note;
+}
+
+TEST(PlannerSupervisor, GoalDwaNeverProposesWhatTheSupervisorWouldStopOverRandomScenes) {
+  // One notion of admissible: whatever goal-dwa proposes, the supervisor
+  // passes unchanged (same footprint, braking model and safe distance).
+  for (const double vmax : {0.5, 2.0}) {
+    NavigationParams nav;
+    RobotParams r = fastRobot();
+    r.v_max = vmax;
+    r.w_max = vmax > 1 ? 4.0 : 1.57;
+    auto planner = makeGoalDwa(nav, r);
+    const SafetySupervisor sup(nav, r);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> U(-1, 1);
+    size_t proposals = 0;
+    for (int trial = 0; trial < 150; ++trial) {
+      std::vector<TPoint2D> obs;
+      const int n = 3 + static_cast<int>(rng() % 10);
+      for (int k = 0; k < n; ++k) {
+        const double x = 0.4 + std::abs(U(rng)) * 2.5, y = 1.5 * U(rng);
+        for (double dx = -0.075; dx <= 0.075; dx += 0.05)
+          for (double dy = -0.075; dy <= 0.075; dy += 0.05) obs.push_back({x + dx, y + dy});
+      }
+      LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+      map.build({0, 0}, obs);
+      if (map.check({0, 0, 0}).collision) continue;
+      PlannerInput in;
+      in.map = &map;
+      in.pose = {0, 0, 0.3 * U(rng)};
+      in.current = {vmax * std::abs(U(rng)), 0.5 * r.w_max * U(rng)};
+      in.path = {{0, 0}, {4, 0}};
+      in.goal = TPose2D{4, 0, 0};
+      const PlannerOutput plan = planner->plan(in);
+      if (!plan.ok) continue;
+      ++proposals;
+      SafetyInput s;
+      s.now = 10;
+      s.last_scan_time = 9.95;
+      s.last_odom_time = 9.99;
+      s.plan = plan;
+      s.pose = in.pose;
+      s.map = &map;
+      const SafetyDecision d = sup.apply(s);
+      EXPECT_EQ(d.action, SafetyAction::Pass)
+          << "v_max " << vmax << " trial " << trial << ": (" << plan.cmd.v << ", " << plan.cmd.w
+          << ") " << d.reason;
+    }
+    EXPECT_GT(proposals, 100u);
+  }
+}
+
+TEST(GoalDwa, TurnsToTheRouteAt4RadPerSecondWithoutSpinningPast) {
+  // The route turns 90 deg right; the robot (4 rad/s) already spins left at
+  // full rate. Heading errors taken after score_time must not wrap: the
+  // robot settles on the route's heading instead of spinning for ever.
+  NavigationParams nav;
+  const RobotParams r = fastRobot();
+  auto planner = makeGoalDwa(nav, r);
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, {});
+  TPose2D pose{0, 0, 0};
+  Twist cur{0, 4.0};
+  double turned = 0;
+  for (int k = 0; k < 60; ++k) {
+    PlannerInput in;
+    in.map = &map;
+    in.pose = pose;
+    in.current = cur;
+    in.path = {{0, 0}, {0, -3}};
+    in.goal = TPose2D{0, -3, -M_PI / 2};
+    const PlannerOutput o = planner->plan(in);
+    ASSERT_TRUE(o.ok) << o.note;
+    // the robot reaches the command within its accelerations in 0.1 s
+    auto toward = [](double c, double t, double a) { return c + std::clamp(t - c, -a, a); };
+    cur = {toward(cur.v, o.cmd.v, r.acc_v * 0.1), toward(cur.w, o.cmd.w, r.acc_w * 0.1)};
+    const TPose2D next = move(pose, cur, 0.1);
+    turned += std::abs(cur.w) * 0.1;
+    pose = next;
+  }
+  // heading on the route (down) within 20 deg and moving along it
+  EXPECT_LT(std::abs(std::remainder(pose.phi + M_PI / 2, 2 * M_PI)), mrpt::DEG2RAD(20.0));
+  EXPECT_LT(pose.y, -0.5);
+  EXPECT_LT(turned, 2 * M_PI);  // no full turn: it did not spin past
+}
+
+}  // namespace
+}  // namespace carenav::navigation
