@@ -290,7 +290,10 @@ PlacesFile parsePlaces(const std::string& text, const std::string& origin) {
   if (!ended)
     ps.fail("the file does not end with \"end: true\": it is truncated or incomplete", ps.line);
 
-  for (auto& [sec, item] : items) {
+  for (auto& entry : items) {
+    // Named, not a structured binding: C++17 lambdas cannot capture those (clang).
+    const auto& sec = entry.first;
+    auto& item = entry.second;
     auto need = [&](const std::string& key) -> std::pair<std::string, int> {
       auto it = item.values.find(key);
       if (it == item.values.end())
