@@ -108,6 +108,14 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   const std::string profile_path = !o.profile.empty() ? o.profile : sc.profile;
   if (profile_path.empty())
     throw InputError(sc.file + ": no robot profile: give --profile or 'profile:' in the scenario");
+  // A path the scenario gives that leads nowhere is the scenario's fault: name it.
+  auto mustExist = [&](const std::string& path, const char* key) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+      throw InputError(sc.file + ": '" + key + ":' " + path + ": no such file");
+  };
+  if (o.profile.empty()) mustExist(profile_path, "profile");
+  mustExist(sc.world, "world");
   Profile prof = Profile::load(profile_path);
   prof.applyOverrides(o.sets);
   prof.validate();
