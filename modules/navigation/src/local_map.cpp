@@ -48,26 +48,69 @@ bool finite(const TPoint2D& p) { return std::isfinite(p.x) && std::isfinite(p.y)
 
 }  // namespace
 
+void ScanCells::begin(int64_t ox, int64_t oy, int64_t reach_cells) {
+  ox_ = ox;
+  oy_ = oy;
+  half_ = reach_cells + 1 <= kMaxHalf ? std::max<int64_t>(reach_cells + 1, 0) : -1;
+  if (half_ < 0) return;
+  const auto side = static_cast<size_t>(2 * half_ + 1);
+  if (stamp_.size() < side * side) stamp_.assign(side * side, 0);
+  if (++now_ == 0) {  // the stamp wrapped: forget every old mark
+    std::fill(stamp_.begin(), stamp_.end(), 0);
+    now_ = 1;
+  }
+}
+
+bool ScanCells::first(int64_t cx, int64_t cy) {
+  const int64_t dx = cx - ox_, dy = cy - oy_;
+  if (half_ < 0 || dx < -half_ || dx > half_ || dy < -half_ || dy > half_) return true;
+  const auto side = static_cast<size_t>(2 * half_ + 1);
+  uint32_t& s = stamp_[static_cast<size_t>(dy + half_) * side + static_cast<size_t>(dx + half_)];
+  if (s == now_) return false;
+  s = now_;
+  return true;
+}
+
 uint64_t ObstacleMemory::key(double x, double y) const { return packCell(x, y, res_); }
 
 void ObstacleMemory::add(const WorldScan& s, double t) {
   // Clear along each ray, from where the sensor sees to one cell before
   // the end point, then mark the hits. Non-finite points are no cells.
   if (!finite(s.origin)) return;
+  // No remembered cell lies farther from the sensor than `reach`: rays are
+  // walked no farther (a long ray in a big room costs nothing then).
+  double reach = 0;
+  for (const auto& [k, seen] : cells_) {
+    (void)seen;
+    const double x = (static_cast<double>(keyX(k)) + 0.5) * res_;
+    const double y = (static_cast<double>(keyY(k)) + 0.5) * res_;
+    reach = std::max(reach, std::hypot(x - s.origin.x, y - s.origin.y) + res_);
+  }
+  const uint64_t o = key(s.origin.x, s.origin.y);
+  visited_.begin(keyX(o), keyY(o), static_cast<int64_t>(std::ceil(reach / res_)));
   for (size_t i = 0; i < s.ends.size(); ++i) {
     if (!finite(s.ends[i])) continue;
     const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
     const double len = std::hypot(dx, dy);
     if (len <= 0) continue;
-    const double stop = (i < s.hit.size() && s.hit[i]) ? len - res_ : len;
+    const double stop = std::min((i < s.hit.size() && s.hit[i]) ? len - res_ : len, reach);
     for (double d = std::max(s.range_min, 0.0); d < stop; d += res_ * 0.5) {
-      auto it = cells_.find(key(s.origin.x + dx * d / len, s.origin.y + dy * d / len));
+      const uint64_t k = key(s.origin.x + dx * d / len, s.origin.y + dy * d / len);
+      if (!visited_.first(keyX(k), keyY(k))) continue;  // cleared already by this scan
+      auto it = cells_.find(k);
       if (it != cells_.end() && it->second < t) cells_.erase(it);
     }
   }
-  for (size_t i = 0; i < s.ends.size(); ++i)
-    if (i < s.hit.size() && s.hit[i] && finite(s.ends[i]))
-      cells_[key(s.ends[i].x, s.ends[i].y)] = t;
+  // Hits whose cell lies beyond the radius would be dropped by the next
+  // prune: they are not kept now (nor do they lengthen the next scan's rays).
+  const TPoint2D centre = s.robot.value_or(s.origin);
+  for (size_t i = 0; i < s.ends.size(); ++i) {
+    if (i >= s.hit.size() || !s.hit[i] || !finite(s.ends[i])) continue;
+    const uint64_t k = key(s.ends[i].x, s.ends[i].y);
+    const double x = (static_cast<double>(keyX(k)) + 0.5) * res_;
+    const double y = (static_cast<double>(keyY(k)) + 0.5) * res_;
+    if (std::hypot(x - centre.x, y - centre.y) <= radius_) cells_[k] = t;
+  }
 }
 
 void ObstacleMemory::addPoints(const std::vector<TPoint2D>& points, double t) {
@@ -118,6 +161,8 @@ void FreeSpaceHistory::markHit(double x, double y, double t) {
 
 void FreeSpaceHistory::addScan(const WorldScan& s, double t) {
   if (!finite(s.origin)) return;
+  const uint64_t o = key(s.origin.x, s.origin.y);
+  visited_.begin(keyX(o), keyY(o), static_cast<int64_t>(std::ceil(radius_ / res_)));
   for (size_t i = 0; i < s.ends.size(); ++i) {
     if (!finite(s.ends[i])) continue;
     const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
@@ -126,15 +171,10 @@ void FreeSpaceHistory::addScan(const WorldScan& s, double t) {
     // Stop two cells short of a hit: the range noise must not free the
     // obstacle's own cell.
     const double stop = std::min((i < s.hit.size() && s.hit[i]) ? len - 2 * res_ : len, radius_);
-    uint64_t last = 0;
-    bool any = false;
     for (double d = std::max(s.range_min, 0.0); d < stop; d += res_) {
       const double x = s.origin.x + dx * d / len, y = s.origin.y + dy * d / len;
       const uint64_t k = key(x, y);
-      if (any && k == last) continue;
-      markFree(x, y, t);
-      last = k;
-      any = true;
+      if (visited_.first(keyX(k), keyY(k))) markFree(x, y, t);  // once per cell and scan
     }
   }
   for (size_t i = 0; i < s.ends.size(); ++i)

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <random>
+#include <set>
 
 namespace carenav::navigation {
 namespace {
@@ -119,7 +121,8 @@ TEST(LocalCostmap, GroupedFootprintCheckAnswersAsSampleBySample) {
     if (dc - fp.circumscribed - res - contact >= cap) {
       const double r = fp.circumscribed;
       const FootprintCheck got = m.check(pose, cap);
-      EXPECT_EQ(got.outside, !m.inside(pose.x + r, pose.y + r) || !m.inside(pose.x - r, pose.y - r));
+      EXPECT_EQ(got.outside,
+                !m.inside(pose.x + r, pose.y + r) || !m.inside(pose.x - r, pose.y - r));
       EXPECT_FALSE(got.collision);
       EXPECT_EQ(got.clearance, cap);
       continue;
@@ -221,6 +224,87 @@ TEST(ObstacleMemory, ARayThroughARememberedCellClearsIt) {
   bool kept = false;
   for (const auto& p : mem.points()) kept |= std::hypot(p.x - 0.2, p.y) < 0.05;
   EXPECT_TRUE(kept);
+}
+
+/** The obstacle memory as first written: every ray walked to its end in
+ *  half-cell steps, every hit kept until the next prune. */
+std::set<std::pair<int, int>> referenceMemory(
+    const std::vector<std::pair<WorldScan, double>>& scans, const TPoint2D& robot, double res,
+    double radius) {
+  std::map<std::pair<int, int>, double> cells;
+  auto cell = [&](double x, double y) {
+    return std::make_pair(static_cast<int>(std::floor(x / res)),
+                          static_cast<int>(std::floor(y / res)));
+  };
+  for (const auto& [s, t] : scans) {
+    for (size_t i = 0; i < s.ends.size(); ++i) {
+      const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
+      const double len = std::hypot(dx, dy);
+      const double stop = s.hit[i] ? len - res : len;
+      for (double d = 0; d < stop; d += res * 0.5) {
+        auto it = cells.find(cell(s.origin.x + dx * d / len, s.origin.y + dy * d / len));
+        if (it != cells.end() && it->second < t) cells.erase(it);
+      }
+    }
+    for (size_t i = 0; i < s.ends.size(); ++i)
+      if (s.hit[i]) cells[cell(s.ends[i].x, s.ends[i].y)] = t;
+  }
+  std::set<std::pair<int, int>> out;
+  for (const auto& [c, t] : cells) {
+    (void)t;
+    if (std::hypot((c.first + 0.5) * res - robot.x, (c.second + 0.5) * res - robot.y) <= radius)
+      out.insert(c);
+  }
+  return out;
+}
+
+TEST(ObstacleMemory, BoundedRaysAndOnceACellGiveTheSameMemoryAsWalkingEveryRay) {
+  // Several scans between two prunes (a 40 Hz lidar, a 10 Hz control loop)
+  // in rooms whose walls lie far beyond the memory's radius: the memory
+  // walks each ray only as far as a remembered cell can be, and each cell
+  // once per scan, and keeps no hit beyond the radius; after the prune it
+  // holds what walking every ray to its end would have left.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  const double res = 0.05, radius = 3.0;
+  for (int trial = 0; trial < 30; ++trial) {
+    ObstacleMemory mem(res, 100.0, radius);
+    const TPoint2D robot{u(rng) * 4 - 2, u(rng) * 4 - 2};
+    std::vector<std::pair<WorldScan, double>> scans;
+    for (int k = 0; k < 4; ++k) {
+      WorldScan s;
+      s.origin = {robot.x + 0.2, robot.y};
+      s.robot = robot;
+      const int beams = 200 + static_cast<int>(rng() % 400);
+      for (int b = 0; b < beams; ++b) {
+        const double a = -2.3 + 4.6 * b / beams;
+        // a far wall, or a near person or box (some rays see nothing)
+        const double r = u(rng) < 0.3 ? 0.5 + 3 * u(rng) : 6 + 14 * u(rng);
+        s.ends.push_back({s.origin.x + r * std::cos(a), s.origin.y + r * std::sin(a)});
+        s.hit.push_back(u(rng) < 0.9 ? 1 : 0);
+      }
+      scans.emplace_back(s, 1.0 + 0.025 * k);
+      mem.add(s, 1.0 + 0.025 * k);
+    }
+    mem.prune(1.1, robot);
+    std::set<std::pair<int, int>> got;
+    for (const auto& p : mem.points())
+      got.insert(
+          {static_cast<int>(std::floor(p.x / res)), static_cast<int>(std::floor(p.y / res))});
+    EXPECT_EQ(got, referenceMemory(scans, robot, res, radius)) << "trial " << trial;
+  }
+}
+
+TEST(ObstacleMemory, HitsBeyondTheRadiusOfTheRobotAreNotKept) {
+  ObstacleMemory mem(0.05, 5.0, 3.0);
+  WorldScan s;
+  s.origin = {0.3, 0};
+  s.robot = TPoint2D{0, 0};
+  s.ends = {{3.2, 0.0}, {2.9, 0.0}, {0.3, -3.1}};
+  s.hit = {1, 1, 1};
+  mem.add(s, 1.0);
+  EXPECT_EQ(mem.size(), 1u)
+      << "(2.9, 0) only: (3.2, 0) and (0.3, -3.1) are beyond 3 m of the robot";
 }
 
 }  // namespace

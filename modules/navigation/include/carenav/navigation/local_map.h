@@ -11,6 +11,7 @@
 #include <mrpt/math/TPose2D.h>
 
 #include <cstdint>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -27,6 +28,27 @@ struct WorldScan {
   std::vector<TPoint2D> ends;
   std::vector<uint8_t> hit;
   double range_min = 0;  ///< m, the sensor is blind closer than this (nothing is cleared there)
+  /** Where the robot was when the scan was taken (the obstacle memory keeps
+   *  hits within its radius of it); none: the sensor's origin. */
+  std::optional<TPoint2D> robot;
+};
+
+/** Cells already visited by the rays of the current scan, on a small dense
+ *  grid around the sensor: near the sensor, a lidar's thousand rays pass the
+ *  same cells again and again; each cell is updated once per scan. */
+class ScanCells {
+ public:
+  /** A new scan from the cell (ox, oy), rays at most `reach_cells` long. */
+  void begin(int64_t ox, int64_t oy, int64_t reach_cells);
+  /** True the first time the cell is met in this scan (always true for a
+   *  cell beyond the reach, or when the reach is too large to cover). */
+  bool first(int64_t cx, int64_t cy);
+
+ private:
+  static constexpr int64_t kMaxHalf = 512;  // 1025 x 1025 cells at most (4 MiB)
+  std::vector<uint32_t> stamp_;
+  uint32_t now_ = 0;
+  int64_t ox_ = 0, oy_ = 0, half_ = -1;
 };
 
 /** Obstacles seen recently, in the world frame, on a hash grid of cells.
@@ -51,6 +73,7 @@ class ObstacleMemory {
   uint64_t key(double x, double y) const;
   double res_, persistence_, radius_;
   std::unordered_map<uint64_t, double> cells_;  // cell -> last time seen
+  ScanCells visited_;
 };
 
 /** Where free space was seen recently (ray clearing of scans, free cells of
@@ -83,6 +106,7 @@ class FreeSpaceHistory {
  private:
   uint64_t key(double x, double y) const;
   double res_, radius_;
+  ScanCells visited_;
   struct Stretch {
     double first = 0, last = 0;
     double hit = -1e300;
