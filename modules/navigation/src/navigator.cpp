@@ -97,6 +97,7 @@ bool Navigator::addObservation(const mrpt::obs::CObservation& obs, const TPose2D
     const CPose2D sensor = robot + CPose2D(scan->sensorPose);
     WorldScan ws;
     ws.origin = {sensor.x(), sensor.y()};
+    ws.robot = TPoint2D{at.x, at.y};
     const size_t n = scan->getScanSize();
     const double max_range = scan->maxRange;
     for (size_t i = 0; i < n; ++i) {
@@ -123,6 +124,7 @@ bool Navigator::addObservation(const mrpt::obs::CObservation& obs, const TPose2D
       const CPose2D sensor = robot + CPose2D(mrpt::poses::CPose3D(m.sensorPose));
       WorldScan ws;
       ws.origin = {sensor.x(), sensor.y()};
+      ws.robot = TPoint2D{at.x, at.y};
       const double r = m.sensedDistance;
       if (!(r > 0) || !std::isfinite(r)) continue;
       const bool hit = r < ra->maxSensorDistance - 1e-3;
@@ -165,9 +167,14 @@ void Navigator::addPerceivedFrame(const std::vector<TPoint2D>& free_cells,
 }
 
 void Navigator::setRoute(const std::vector<TPoint2D>& waypoints, const TPose2D& goal) {
+  const bool new_goal =
+      !goal_ || goal_->x != goal.x || goal_->y != goal.y || goal_->phi != goal.phi;
   route_ = waypoints;
   goal_ = goal;
-  recovery_.routeChanged(odom_t_.value_or(0.0));
+  if (new_goal)
+    recovery_.newGoal(odom_t_.value_or(0.0));
+  else
+    recovery_.routeChanged(odom_t_.value_or(0.0));
 }
 
 namespace {

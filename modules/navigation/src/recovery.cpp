@@ -214,6 +214,15 @@ void Recovery::routeChanged(double now) {
   best_t_ = now;
 }
 
+void Recovery::newGoal(double now) {
+  routeChanged(now);
+  phase_ = Phase::Idle;
+  reason_.clear();
+  attempts_ = 0;
+  replan_ = false;
+  blocked_since_.reset();
+}
+
 void Recovery::start(double now, const PlannerInput& in, const std::string& why) {
   ++recoveries_;
   ++attempts_;

@@ -70,7 +70,19 @@ struct Reader {
     const auto v = numbers(n, what + " [x, y, heading_deg]", 3);
     return {v[0], v[1], mrpt::DEG2RAD(v[2])};
   }
+  /** A goal: [x, y, heading_deg], or the name of a place or room. */
+  GoalRef goal(const Node& n, const std::string& what) const {
+    GoalRef g;
+    if (n.kind == Node::Kind::Scalar && (n.quoted || !n.scalar.empty()))
+      g.name = text(n, what);
+    else
+      g.pose = pose(n, what);
+    return g;
+  }
 };
+
+/** At most this many goals in a patrol (a bound on the reader's work). */
+constexpr size_t kMaxPatrolGoals = 1000;
 
 }  // namespace
 
@@ -82,9 +94,9 @@ Scenario parseScenario(const std::string& text, const std::string& origin,
   const Node root = yaml::parse(text, origin);
   if (root.kind != Node::Kind::Map) r.fail(root, "a scenario is a map of keys");
   static const std::set<std::string> known = {
-      "format",    "name",        "world",          "profile",      "plugin",     "start",
-      "goal",      "intent",      "intent_heading", "heading_gain", "duration",   "reach",
-      "forbidden", "path_exists", "seed",           "places",       "user_speed", "end"};
+      "format", "name",           "world",        "profile",  "plugin", "start",      "goal",
+      "intent", "intent_heading", "heading_gain", "duration", "reach",  "forbidden",  "path_exists",
+      "seed",   "places",         "user_speed",   "end",      "patrol", "leg_timeout"};
   for (size_t i = 0; i < root.map.size(); ++i)
     if (!known.count(root.map[i].first))
       throw InputError(origin + ":" + std::to_string(root.key_lines[i]) + ": unknown key '" +
@@ -115,10 +127,22 @@ Scenario parseScenario(const std::string& text, const std::string& origin,
   if (!start) throw InputError(origin + ": 'start: [x, y, heading_deg]' is required");
   s.start = r.pose(*start, "start");
   if (const Node* n = root.find("goal")) {
-    if (n->kind == Node::Kind::Scalar && (n->quoted || !n->scalar.empty()))
-      s.goal_name = r.text(*n, "goal");
-    else
-      s.goal = r.pose(*n, "goal");
+    const GoalRef g = r.goal(*n, "goal");
+    s.goal = g.pose;
+    s.goal_name = g.name;
+  }
+  if (const Node* n = root.find("patrol")) {
+    if (root.find("goal")) r.fail(*n, "give either goal or patrol, not both");
+    if (n->kind != Node::Kind::Seq || n->seq.size() < 2 || n->seq.size() > kMaxPatrolGoals)
+      r.fail(*n, "patrol: expected a list of 2 to " + std::to_string(kMaxPatrolGoals) +
+                     " goals ([x, y, heading_deg] or a place name)");
+    for (const auto& e : n->seq) s.patrol.push_back(r.goal(e, "patrol goal"));
+    s.goal = s.patrol.front().pose;
+    s.goal_name = s.patrol.front().name;
+  }
+  if (const Node* n = root.find("leg_timeout")) {
+    s.leg_timeout = r.number(*n, "leg_timeout");
+    if (s.leg_timeout <= 0) r.fail(*n, "leg_timeout must be positive (s)");
   }
   auto readIntent = [&](const Node& n, bool heading) {
     if (n.kind != Node::Kind::Seq || n.seq.empty())
@@ -146,7 +170,7 @@ Scenario parseScenario(const std::string& text, const std::string& origin,
   const bool has_goal = s.goal.has_value() || !s.goal_name.empty();
   if (has_goal == !s.intent.empty())
     throw InputError(origin +
-                     ": give exactly one of 'goal' (goal navigation) and "
+                     ": give exactly one of 'goal' or 'patrol' (goal navigation) and "
                      "'intent'/'intent_heading' (a user pushing a walker)");
   if (const Node* n = root.find("heading_gain")) s.heading_gain = r.number(*n, "heading_gain");
   if (const Node* n = root.find("user_speed")) {

@@ -3,6 +3,7 @@
 #include <carenav/common/errors.h>
 #include <carenav/common/json.h>
 #include <carenav/common/profile.h>
+#include <carenav/common/run_health.h>
 #include <carenav/io/map_render.h>
 #include <carenav/localization/localizer.h>
 #include <carenav/navigation/global_planner.h>
@@ -86,10 +87,42 @@ std::vector<TPoint2D> withStart(const TPoint2D& start, const std::vector<TPoint2
 /** Cells of the perception grid above this occupancy probability are obstacles. */
 constexpr double perception_occupied = 0.6;
 
+/** A path kept for the picture: beyond kMaxPathPoints every second point is
+ *  dropped, so a run of any length holds a bounded number of them. */
+constexpr size_t kMaxPathPoints = 20000;
+void appendBounded(std::vector<TPoint2D>& path, const TPoint2D& p) {
+  if (path.size() >= kMaxPathPoints) {
+    size_t j = 0;
+    for (size_t i = 0; i < path.size(); i += 2) path[j++] = path[i];
+    path.resize(j);
+  }
+  path.push_back(p);
+}
+
+/** Resident memory is sampled every this many simulated seconds, and the
+ *  cycle-time percentile is reported per window of kWindowSeconds. */
+constexpr double kMemorySampleSeconds = 60, kWindowSeconds = 600;
+
 std::string fmt(double v, int prec = 3) {
   char b[48];
   std::snprintf(b, sizeof b, "%.*f", prec, v);
   return b;
+}
+
+/** How a patrol's leg ended: the robot reported the goal reached (checked
+ *  against the truth), or it gave up or ran out of time. */
+enum class LegEnd { Reported, Failed };
+
+std::string patrolOutcome(const RunMetrics& m) {
+  const size_t legs = m.legs_completed + m.legs_missed + m.legs_failed;
+  if (m.legs_failed == 0 && m.legs_missed == 0 && m.legs_completed > 0)
+    return "patrolled " + std::to_string(m.legs_completed) + " legs";
+  std::string s =
+      std::to_string(m.legs_failed) + " of " + std::to_string(legs) + " patrol legs failed";
+  if (m.legs_missed > 0)
+    s += ", " + std::to_string(m.legs_missed) + " reported reached up to " +
+         fmt(m.leg_miss_max_m, 2) + " m from the goal";
+  return s;
 }
 
 }  // namespace
@@ -103,6 +136,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     sc.goal_name.clear();
     sc.goal = parsePoseText(o.goal);
     if (!sc.goal) sc.goal_name = o.goal;
+    sc.patrol.clear();
   }
   // Profile: --profile, else the scenario's.
   const std::string profile_path = !o.profile.empty() ? o.profile : sc.profile;
@@ -149,16 +183,24 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   Navigator navigator(nav, robot);
   navigator.setRecoveryParams(prof.section<RecoveryParams>("nav.recovery"));
   const bool walker = navigator.planner().needsUserIntent();
-  std::optional<TPose2D> goal = sc.goal;
+  // Goals by name: a place, a room's default place or its most central free cell.
+  std::optional<places::PlacesFile> places_file;
+  auto resolve = [&](const GoalRef& ref) -> std::pair<TPose2D, std::string> {
+    if (ref.pose) return {*ref.pose, ""};
+    if (!places_file)
+      places_file = places::readPlacesFile(sc.places.empty() ? places::placesPathForMap(sc.world)
+                                                             : sc.places);
+    const places::Goal g = places::resolveGoal(*places_file, world->grid(), ref.name);
+    return {TPose2D{g.x, g.y, mrpt::DEG2RAD(g.heading_deg)},
+            g.room + (g.place.empty() ? "" : "/" + g.place)};
+  };
+  std::vector<std::pair<TPose2D, std::string>> patrol;  // a patrol's goals, resolved
+  for (const auto& ref : sc.patrol) patrol.push_back(resolve(ref));
+  const bool patrolling = !patrol.empty();
+  std::optional<TPose2D> goal;
   std::string goal_label;
-  if (!sc.goal_name.empty()) {
-    // A goal by name: a place, a room's default place or its most central free cell.
-    const std::string pf = sc.places.empty() ? places::placesPathForMap(sc.world) : sc.places;
-    const places::Goal g =
-        places::resolveGoal(places::readPlacesFile(pf), world->grid(), sc.goal_name);
-    goal = TPose2D{g.x, g.y, mrpt::DEG2RAD(g.heading_deg)};
-    goal_label = g.room + (g.place.empty() ? "" : "/" + g.place);
-  }
+  if (sc.goal || !sc.goal_name.empty())
+    std::tie(goal, goal_label) = resolve(GoalRef{sc.goal, sc.goal_name});
   const bool goal_mode = goal.has_value();
   // A walker with a goal: the scripted user walks there along the route (a
   // user who knows the way), steering at heading_gain towards the point
@@ -190,23 +232,32 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   const Footprint fp(robot.footprint, nav.resolution);
   std::unique_ptr<GlobalPlanner> gp;
   NavigationParams route_nav = nav;  // the route's clearance (narrowed when nothing else fits)
-  if (goal_mode) {
-    gp = std::make_unique<GlobalPlanner>(world->grid(), fp.inscribed, nav);
-    auto planRoute = [&] {
+  // The route from `from` to the goal; when there is no way with
+  // plan_clearance to spare, a passage the footprint fits with its padding
+  // is taken (and later routes may use it too).
+  auto planRoute = [&](const TPoint2D& from) {
+    auto plan = [&] {
       try {
-        return gp->plan({sc.start.x, sc.start.y}, {goal->x, goal->y});
+        return gp->plan(from, {goal->x, goal->y});
       } catch (const InputError& e) {  // a start or goal off the map: the scenario's fault
         throw InputError(sc.file + ": " + e.what());
       }
     };
-    route = planRoute();
-    if (!route && route_nav.plan_clearance > route_nav.footprint_padding) {
-      // No way with plan_clearance to spare: a passage the footprint fits
-      // with its padding is taken (and replanned routes may use it too).
+    auto r = plan();
+    if (!r && route_nav.plan_clearance > route_nav.footprint_padding) {
       route_nav.plan_clearance = route_nav.footprint_padding;
       gp = std::make_unique<GlobalPlanner>(world->grid(), fp.inscribed, route_nav);
-      route = planRoute();
+      r = plan();
     }
+    return r;
+  };
+  for (const auto& [g, label] : patrol)
+    if (!world->inside(world->cellX(g.x), world->cellY(g.y)))
+      throw InputError(sc.file + ": patrol goal " + (label.empty() ? "" : label + " ") + "at (" +
+                       fmt(g.x, 2) + ", " + fmt(g.y, 2) + ") is off the world's map");
+  if (goal_mode) {
+    gp = std::make_unique<GlobalPlanner>(world->grid(), fp.inscribed, nav);
+    route = planRoute({sc.start.x, sc.start.y});
     if (route) navigator.setRoute(withStart({sc.start.x, sc.start.y}, route->waypoints), *goal);
     if (!loc_sensor.empty()) {
       loc = std::make_unique<localization::Localizer>(world->grid(), locp);
@@ -249,6 +300,50 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   std::string last_recovery;
   bool collision_end = false;
   TPoint2D route_start{sc.start.x, sc.start.y};
+  // A patrol: the leg to the current goal ends (reached in truth, or not:
+  // given up, timed out, stopped away from it) and the next goal is taken.
+  size_t leg = 0;
+  double leg_t0 = 0;
+  auto nextLeg = [&](LegEnd end, const sim::Pose2& truth, double now) {
+    if (end == LegEnd::Reported) {
+      const double err = std::hypot(truth.x - goal->x, truth.y - goal->y);
+      if (err > nav.goal_tolerance) {
+        ++m.legs_missed;  // the robot's localisation put it there; the truth did not
+        m.leg_miss_max_m = std::max(m.leg_miss_max_m, err);
+      } else {
+        ++m.legs_completed;
+      }
+    } else {
+      ++m.legs_failed;
+    }
+    leg = (leg + 1) % patrol.size();
+    std::tie(goal, goal_label) = patrol[leg];
+    leg_t0 = now;
+    const TPose2D mp = navigator.mapPose();
+    route_start = {mp.x, mp.y};
+    route = planRoute(route_start);
+    if (route)
+      navigator.setRoute(withStart(route_start, route->waypoints), *goal);
+    else
+      navigator.clearRoute();  // the replanner keeps trying; the leg times out otherwise
+  };
+  // Health of the run: the robot's work per control period (sensor
+  // processing, localisation, the navigator, replanning), in a histogram of
+  // fixed size; resident memory sampled every kMemorySampleSeconds.
+  DurationHistogram work_all, work_window;
+  double work_ms = 0;
+  auto sampleHealth = [&](size_t k) {
+    work_all.add(work_ms);
+    work_window.add(work_ms);
+    const auto per = [&](double s) {
+      return std::max<size_t>(1, std::llround(s * o.control_rate));
+    };
+    if (k % per(kMemorySampleSeconds) == 0) m.rss_mb.push_back(residentMegabytes());
+    if ((k + 1) % per(kWindowSeconds) == 0) {
+      m.work_ms_p99_windows.push_back(work_window.quantile(0.99));
+      work_window.clear();
+    }
+  };
   for (size_t k = 0; k < steps; ++k) {
     if (o.stop && o.stop->load()) break;
     if (o.speed > 0) {
@@ -258,7 +353,9 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
       std::this_thread::sleep_until(due);
     }
     // Sensors and odometry of the last period.
-    for (const auto& f : sim.step(dt)) {
+    const auto frames = sim.step(dt);
+    const double work0 = threadCpuMs();
+    for (const auto& f : frames) {
       const TPose2D odo{f.odometry.x, f.odometry.y, f.odometry.yaw};
       navigator.setOdometry(odo, {sim.v(), sim.w()}, f.t);
       for (const auto& obs : f.observations) {
@@ -323,7 +420,10 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     const sim::Pose2 truth = sim.groundTruth();
     std::optional<Twist> user;
     if (user_walks_route) {
-      if (std::hypot(truth.x - goal->x, truth.y - goal->y) < nav.goal_tolerance) {
+      const bool there = std::hypot(truth.x - goal->x, truth.y - goal->y) < nav.goal_tolerance;
+      if (patrolling && (there || t - leg_t0 > sc.leg_timeout)) {
+        nextLeg(there ? LegEnd::Reported : LegEnd::Failed, truth, t);
+      } else if (std::hypot(truth.x - goal->x, truth.y - goal->y) < nav.goal_tolerance) {
         goal_reached = true;
         t_end = t;
         break;
@@ -337,7 +437,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
         const double v = std::abs(err) > M_PI / 3 ? 0.0 : sc.user_speed;
         user = Twist{v, std::clamp(sc.heading_gain * err, -robot.w_max, robot.w_max)};
         navigator.setUserIntent(*user, t);
-        user_path.push_back({truth.x, truth.y});
+        appendBounded(user_path, {truth.x, truth.y});
       }
     } else if (o.intent) {
       std::optional<IntentSample> s;
@@ -354,7 +454,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
           user = s->cmd;
           user_pose = integrateArc(user_pose, s->cmd.v,
                                    std::clamp(s->cmd.w, -robot.w_max, robot.w_max), dt);
-          user_path.push_back({user_pose.x, user_pose.y});
+          appendBounded(user_path, {user_pose.x, user_pose.y});
         }
       }
       // The source has ended (script over, q pressed): stop once the walker stands.
@@ -373,7 +473,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
         const auto ui = sc.userAt(t, user_pose.phi);
         user_pose = integrateArc(user_pose, ui->first,
                                  std::clamp(ui->second, -robot.w_max, robot.w_max), dt);
-        user_path.push_back({user_pose.x, user_pose.y});
+        appendBounded(user_path, {user_pose.x, user_pose.y});
       }
     }
     const auto c0 = std::chrono::steady_clock::now();
@@ -381,6 +481,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0).count();
     cycle_ms_sum += ms;
+    work_ms = threadCpuMs() - work0;
     m.cycle_ms_max = std::max(m.cycle_ms_max, ms);
     ++m.cycles;
     sim.setCommand(cyc.decision.cmd.v, cyc.decision.cmd.w);
@@ -391,7 +492,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     const double cl = truth_clear.at(truth, sim::peopleAt(*world, t));
     m.min_clearance_m = std::min(m.min_clearance_m, cl);
     clear_sum += cl;
-    truth_path.push_back({truth.x, truth.y});
+    appendBounded(truth_path, {truth.x, truth.y});
     for (const auto& poly : sc.forbidden)
       if (places::pointInPolygon(poly, truth.x, truth.y)) m.entered_forbidden = true;
     // Off the world's map: the run is a failure.
@@ -432,7 +533,9 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
                 << " " << safetyActionName(cyc.decision.action) << ", clearance " << fmt(cl, 2)
                 << " m, " << sim.collisions() << " collisions   " << std::flush;
     }
-    if (goal_mode && cyc.goal_reached) {
+    if (patrolling && !walker && (cyc.goal_reached || cyc.gave_up || t - leg_t0 > sc.leg_timeout)) {
+      nextLeg(cyc.goal_reached ? LegEnd::Reported : LegEnd::Failed, truth, t);
+    } else if (goal_mode && cyc.goal_reached) {
       goal_reached = true;
       t_end = t;
       break;
@@ -443,7 +546,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
       collision_end = true;
       break;
     }
-    if (cyc.gave_up) {
+    if (cyc.gave_up && !patrolling) {
       gave_up = cyc.plan.note;
       t_end = t;
       break;
@@ -452,6 +555,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     // marked on the map (boxes and people the map does not show; when that
     // finds no route, the last one stays). A walker's scripted user walks
     // the new route too: a user sees boxes and people.
+    const double replan0 = threadCpuMs();
     if (goal_mode && gp && (cyc.replan || replanner.due(k, !navigator.predicted().empty()))) {
       const TPose2D mp = navigator.mapPose();
       if (auto r2 = replanner.step(!navigator.predicted().empty(), world->grid(),
@@ -462,12 +566,19 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
         navigator.setRoute(withStart({mp.x, mp.y}, route->waypoints), *goal);
       }
     }
+    work_ms += threadCpuMs() - replan0;
+    sampleHealth(k);
   }
   if (tty) std::cerr << "\n";
+  if (work_window.count() > 0) m.work_ms_p99_windows.push_back(work_window.quantile(0.99));
+  m.work_ms_p99 = work_all.quantile(0.99);
+  m.work_ms_max = work_all.max();
+  m.rss_mb.push_back(residentMegabytes());
   m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   m.collisions = sim.collisions();
-  m.duration_s =
-      goal_reached || intent_over || collision_end || !gave_up.empty() ? t_end : sim.time();
+  m.duration_s = !patrolling && (goal_reached || intent_over || collision_end || !gave_up.empty())
+                     ? t_end
+                     : sim.time();
   m.recovery_cycles = recovery_cycles;
   m.left_map = left_map;
   m.path_length_m = sim.distance();
@@ -492,6 +603,8 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     m.outcome = "left the map";
   else if (!gave_up.empty())
     m.outcome = gave_up;
+  else if (patrolling)
+    m.outcome = patrolOutcome(m);
   else if (goal_mode && !route)
     m.outcome = sc.path_exists ? "no route to the goal" : "no route (as expected)";
   else if (goal_mode && !goal_reached)
@@ -502,8 +615,10 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     m.outcome = "did not reach the target region";
   else
     m.outcome = goal_mode ? "goal reached" : "ok";
+  const bool goal_ok = patrolling ? m.legs_failed == 0 && m.legs_missed == 0 && m.legs_completed > 0
+                                  : at_goal || (!route && !sc.path_exists);
   m.success = m.collisions == 0 && !m.entered_forbidden && !left_map && gave_up.empty() &&
-              (goal_mode ? (at_goal || (!route && !sc.path_exists)) : true) &&
+              (goal_mode ? goal_ok : true) &&
               (!sc.reach || o.intent || reached);  // a live user goes where they like
 
   if (!o.out_dir.empty()) {
@@ -581,6 +696,10 @@ std::string RunMetrics::toJson() const {
     j.key("intent_fidelity").value(intent_fidelity);
   j.key("final_goal_error_m").value(final_goal_error_m);
   j.key("recoveries").value(static_cast<uint64_t>(recoveries));
+  j.key("legs_completed").value(static_cast<uint64_t>(legs_completed));
+  j.key("legs_failed").value(static_cast<uint64_t>(legs_failed));
+  j.key("legs_missed").value(static_cast<uint64_t>(legs_missed));
+  j.key("leg_miss_max_m").value(leg_miss_max_m);
   j.key("recovery_cycles").value(static_cast<uint64_t>(recovery_cycles));
   j.key("left_map").value(left_map);
   j.key("cycles").value(static_cast<uint64_t>(cycles));
@@ -588,6 +707,14 @@ std::string RunMetrics::toJson() const {
   j.key("slowed").value(static_cast<uint64_t>(slowed));
   j.key("cycle_ms_mean").value(cycle_ms_mean);
   j.key("cycle_ms_max").value(cycle_ms_max);
+  j.key("work_ms_p99").value(work_ms_p99);
+  j.key("work_ms_max").value(work_ms_max);
+  j.key("work_ms_p99_per_10min").beginArray();
+  for (double v : work_ms_p99_windows) j.value(v);
+  j.endArray();
+  j.key("rss_mb_per_minute").beginArray();
+  for (double v : rss_mb) j.value(v);
+  j.endArray();
   j.key("depth_frames").value(static_cast<uint64_t>(depth_frames));
   j.key("perception_ms_mean").value(perception_ms_mean);
   j.key("wall_seconds").value(wall_seconds);

@@ -53,6 +53,9 @@ class Recovery {
                                     bool blocked, double route_left);
   /** A fresh route (replanned): progress is measured on it from now. */
   void routeChanged(double now);
+  /** A new goal: whatever happened on the way to the last one (attempts,
+   *  giving up) is forgotten; the recorded path is kept (still known free). */
+  void newGoal(double now);
 
   /** The command that backs out along the recorded path from `pose`
    *  (reversing when the way back lies behind, forwards when the robot has

@@ -30,6 +30,12 @@ struct IntentEntry {
   std::optional<double> heading;  ///< rad
 };
 
+/** A goal of a scenario: a pose, or the name of a place or room. */
+struct GoalRef {
+  std::optional<TPose2D> pose;  ///< map frame
+  std::string name;             ///< "room/place", "room" or "place" of the places file
+};
+
 /** A scenario file (docs/navigate.md). */
 struct Scenario {
   std::string name;     ///< `name:` or the file's stem
@@ -38,9 +44,13 @@ struct Scenario {
   std::string profile;  ///< robot profile (may be empty: --profile)
   std::string plugin;   ///< local planner (may be empty: the profile's)
   TPose2D start;
-  std::optional<TPose2D> goal;      ///< goal scenario (map frame)
-  std::string goal_name;            ///< "room/place", "room" or "place" of the places file
-  std::string places;               ///< places file for goal_name (default: WORLD.places.yaml)
+  std::optional<TPose2D> goal;  ///< goal scenario (map frame)
+  std::string goal_name;        ///< "room/place", "room" or "place" of the places file
+  std::string places;           ///< places file for goal_name (default: WORLD.places.yaml)
+  /** Goals visited in turn, from the first again after the last, until
+   *  `duration` (soak runs); the first is also `goal`/`goal_name`. */
+  std::vector<GoalRef> patrol;
+  double leg_timeout = 300;  ///< s, patrol: a goal not reached by then is given up for the next
   std::vector<IntentEntry> intent;  ///< walker scenario
   double heading_gain = 1.5;        ///< rad/s per rad of heading error for heading intents
   /** m/s, a walker scenario with a goal: the scripted user walks the route
@@ -89,6 +99,20 @@ struct RunMetrics {
   bool left_map = false;       ///< the true centre went off the world's map (or onto unknown)
   size_t recoveries = 0;       ///< recovery behaviours started (goal robots)
   size_t recovery_cycles = 0;  ///< control cycles spent in them
+  size_t legs_completed = 0;   ///< patrol: goals reached (in truth)
+  size_t legs_failed = 0;      ///< patrol: goals given up or timed out
+  /** Patrol: goals the robot reported reached while its true centre was
+   *  farther than goal_tolerance (its localisation was off), and the worst. */
+  size_t legs_missed = 0;
+  double leg_miss_max_m = 0;
+  /** The robot's work per control period, as CPU time of the thread
+   *  (sensor processing, localisation, the navigator, replanning; not the
+   *  simulator): 99th percentile and
+   *  maximum over the run, and the 99th percentile of each 10 minutes. */
+  double work_ms_p99 = 0, work_ms_max = 0;
+  std::vector<double> work_ms_p99_windows;
+  /** Resident memory (MiB) at the start and every simulated minute, and at the end. */
+  std::vector<double> rss_mb;
   std::vector<std::string> outputs;
   std::string toJson() const;
   /** Lists run.png (`png`, written by the caller) and navlog.csv of
