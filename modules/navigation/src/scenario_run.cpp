@@ -172,8 +172,9 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     throw InputError("--intent " + o.intent->describe() +
                      ": the user drives the walker; give no goal with it");
   if (!walker && !goal_mode)
-    throw InputError(sc.file + ": plugin " + nav.plugin +
-                     " drives to a goal; this scenario scripts a user (use user-intent-dwa)");
+    throw PluginMismatchError(sc.file + ": plugin " + nav.plugin +
+                              " drives to a goal; this scenario scripts a user (use "
+                              "user-intent-dwa)");
 
   RunMetrics m;
   m.scenario = sc.name;
