@@ -134,14 +134,8 @@ std::array<double, 3> poseAtEndOfRawlog(const Args& a, const GlobalOptions& g) {
   return {e.x, e.y, e.yaw * 180 / M_PI};
 }
 
-void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
-  auto* cmd = app.add_subcommand(
-      "places",
-      "Rooms (named polygons) and places (named poses) on a map, kept in MAP's .places.yaml: "
-      "edit, list, locate a point, check against the map, draw, and turn names into goals");
-  cmd->require_subcommand(1);
-
-  // ---- add-room
+/** `places add-room`: a room from its corners or a rectangle. */
+void addAddRoom(CLI::App* cmd, const GlobalOptions& g) {
   struct AddRoomArgs {
     FileArgs f;
     std::string name, polygon, rect;
@@ -177,8 +171,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     save(f, path, g);
     std::cout << "room \"" << r.name << "\" added (" << r.polygon.size() << " corners)\n";
   });
+}
 
-  // ---- add-place
+/** `places add-place`: a place from its pose, or from where a rawlog ends (--here). */
+void addAddPlace(CLI::App* cmd, const GlobalOptions& g) {
   struct AddPlaceArgs {
     FileArgs f;
     std::string name, pose, kind = "place", room;
@@ -247,8 +243,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     if (!room && !g.quiet)
       std::cerr << "[places] warning: \"" << p.name << "\" lies outside every room\n";
   });
+}
 
-  // ---- rename / remove
+/** `places rename / remove`: rename and remove, references following. */
+void addRenameAndRemove(CLI::App* cmd, const GlobalOptions& g) {
   struct RenameArgs {
     FileArgs f;
     std::string old_name, new_name;
@@ -282,8 +280,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     save(f, path, g);
     std::cout << "\"" << rm->name << "\" removed\n";
   });
+}
 
-  // ---- list
+/** `places list`: every room and its places. */
+void addList(CLI::App* cmd) {
   struct ListArgs {
     FileArgs f;
     bool json = false;
@@ -298,8 +298,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     std::cout << (ls->json ? dumpJson(places::listJson(f, path)) + "\n"
                            : places::listText(f, path));
   });
+}
 
-  // ---- where
+/** `places where`: the room at a point and the nearest place. */
+void addWhere(CLI::App* cmd) {
   struct WhereArgs {
     FileArgs f;
     std::string at;
@@ -320,8 +322,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     std::cout << (wh->json ? dumpJson(places::whereJson(v[0], v[1], w)) + "\n"
                            : places::whereText(w));
   });
+}
 
-  // ---- check
+/** `places check`: the rooms and places against the map; exit 2 on any problem. */
+void addCheck(CLI::App* cmd) {
   struct CheckArgs {
     FileArgs f;
     double radius = 0.35;
@@ -366,8 +370,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
       throw InputError(path + ": " + std::to_string(problems.size()) + " problem" +
                        (problems.size() == 1 ? "" : "s"));
   });
+}
 
-  // ---- render
+/** `places render`: the map with its rooms and places as a PNG. */
+void addRender(CLI::App* cmd, const GlobalOptions& g) {
   struct RenderArgs {
     FileArgs f;
     std::string out;
@@ -389,8 +395,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     places::renderPlacesPng(f, grid, rd->out, ro);
     if (!g.quiet) std::cerr << "[places] wrote " << rd->out << "\n";
   });
+}
 
-  // ---- goal
+/** `places goal`: a name to a goal pose. */
+void addGoal(CLI::App* cmd) {
   struct GoalArgs {
     FileArgs f;
     std::string name;
@@ -410,6 +418,22 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     const places::Goal r = places::resolveGoal(f, grid, gl->name);
     std::cout << (gl->json ? dumpJson(places::goalJson(gl->name, r)) + "\n" : places::goalText(r));
   });
+}
+
+void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
+  auto* cmd = app.add_subcommand(
+      "places",
+      "Rooms (named polygons) and places (named poses) on a map, kept in MAP's .places.yaml: "
+      "edit, list, locate a point, check against the map, draw, and turn names into goals");
+  cmd->require_subcommand(1);
+  addAddRoom(cmd, g);
+  addAddPlace(cmd, g);
+  addRenameAndRemove(cmd, g);
+  addList(cmd);
+  addWhere(cmd);
+  addCheck(cmd);
+  addRender(cmd, g);
+  addGoal(cmd);
 }
 
 }  // namespace
