@@ -12,9 +12,7 @@
 #include <carenav/navigation/suite.h>
 
 #include <atomic>
-#include <cmath>
 #include <csignal>
-#include <cstdio>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -57,40 +55,9 @@ std::vector<std::string> splitComma(const std::string& s) {
   return out;
 }
 
-std::string cell(double v, int prec = 2) {
-  if (std::isnan(v)) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.*f", prec, v);
-  return b;
-}
-
-void printTable(const std::vector<navigation::RunMetrics>& runs) {
-  std::printf("%-24s %-16s %-7s %5s %7s %7s %7s %7s %6s %8s %7s  %s\n", "scenario", "plugin",
-              "success", "coll", "minclr", "meanclr", "time_s", "path_m", "v_mps", "fidelity",
-              "cyc_ms", "outcome");
-  size_t ok = 0;
-  for (const auto& r : runs) {
-    std::printf("%-24s %-16s %-7s %5zu %7s %7s %7s %7s %6s %8s %7s  %s\n", r.scenario.c_str(),
-                r.plugin.c_str(), r.success ? "yes" : "NO", r.collisions,
-                cell(r.min_clearance_m).c_str(), cell(r.mean_clearance_m).c_str(),
-                cell(r.duration_s, 1).c_str(), cell(r.path_length_m).c_str(),
-                cell(r.mean_speed_mps).c_str(), cell(r.intent_fidelity, 3).c_str(),
-                cell(r.cycle_ms_mean, 2).c_str(), r.outcome.c_str());
-    ok += r.success;
-  }
-  std::printf("%zu of %zu runs succeeded\n", ok, runs.size());
-}
-
 void report(const NavigateArgs& a, const GlobalOptions& g,
             const std::vector<navigation::RunMetrics>& runs) {
-  if (a.json) {
-    std::cout << "[\n";
-    for (size_t i = 0; i < runs.size(); ++i)
-      std::cout << runs[i].toJson() << (i + 1 < runs.size() ? ",\n" : "\n");
-    std::cout << "]\n";
-  } else {
-    printTable(runs);
-  }
+  std::cout << (a.json ? navigation::runsJson(runs) : navigation::runsTable(runs)) << std::flush;
   if (!g.quiet)
     for (const auto& r : runs)
       for (const auto& f : r.outputs) std::cerr << "[navigate] wrote " << f << "\n";

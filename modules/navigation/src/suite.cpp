@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <limits>
@@ -159,6 +161,46 @@ std::vector<RunMetrics> runSuite(const std::vector<Scenario>& scenarios,
     }
   }
   return runs;
+}
+
+namespace {
+
+std::string cell(double v, int prec = 2) {
+  if (std::isnan(v)) return "-";
+  char b[32];
+  std::snprintf(b, sizeof b, "%.*f", prec, v);
+  return b;
+}
+
+}  // namespace
+
+std::string runsTable(const std::vector<RunMetrics>& runs) {
+  std::string out;
+  const auto line = [&out](const char* format, auto... args) {
+    std::string b(static_cast<size_t>(std::snprintf(nullptr, 0, format, args...)), '\0');
+    std::snprintf(b.data(), b.size() + 1, format, args...);
+    out += b;
+  };
+  line("%-24s %-16s %-7s %5s %7s %7s %7s %7s %6s %8s %7s  %s\n", "scenario", "plugin", "success",
+       "coll", "minclr", "meanclr", "time_s", "path_m", "v_mps", "fidelity", "cyc_ms", "outcome");
+  size_t ok = 0;
+  for (const auto& r : runs) {
+    line("%-24s %-16s %-7s %5zu %7s %7s %7s %7s %6s %8s %7s  %s\n", r.scenario.c_str(),
+         r.plugin.c_str(), r.success ? "yes" : "NO", r.collisions, cell(r.min_clearance_m).c_str(),
+         cell(r.mean_clearance_m).c_str(), cell(r.duration_s, 1).c_str(),
+         cell(r.path_length_m).c_str(), cell(r.mean_speed_mps).c_str(),
+         cell(r.intent_fidelity, 3).c_str(), cell(r.cycle_ms_mean, 2).c_str(), r.outcome.c_str());
+    ok += r.success;
+  }
+  line("%zu of %zu runs succeeded\n", ok, runs.size());
+  return out;
+}
+
+std::string runsJson(const std::vector<RunMetrics>& runs) {
+  std::string out = "[\n";
+  for (size_t i = 0; i < runs.size(); ++i)
+    out += runs[i].toJson() + (i + 1 < runs.size() ? ",\n" : "\n");
+  return out + "]\n";
 }
 
 }  // namespace carenav::navigation

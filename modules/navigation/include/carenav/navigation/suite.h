@@ -38,4 +38,11 @@ RunMetrics runInChild(const Scenario& s, const RunOptions& o);
 std::vector<RunMetrics> runSuite(const std::vector<Scenario>& scenarios,
                                  const std::vector<std::string>& plugins, const RunOptions& base);
 
+/** The runs as a table, one line each (scenario, plugin, success,
+ *  collisions, clearances, time, path, speed, fidelity, cycle time,
+ *  outcome), and how many succeeded. */
+std::string runsTable(const std::vector<RunMetrics>& runs);
+/** The runs as a JSON array of their summaries. */
+std::string runsJson(const std::vector<RunMetrics>& runs);
+
 }  // namespace carenav::navigation
