@@ -80,6 +80,30 @@ TEST(RunMetricsJson, CompleteRecordReadsBackWhole) {
   EXPECT_EQ(b.outputs, m.outputs);
 }
 
+// Every key the record writes is read back: each value is replaced by one
+// no default has, and must come back as it went (a field added to toJson but
+// not to fromJson fails here).
+TEST(RunMetricsJson, EveryKeyWrittenIsReadBack) {
+  carenav::Json j = sample().toJsonValue(true);
+  for (auto& [key, v] : j.items()) {
+    if (v.is_boolean())
+      v = !v.get<bool>();
+    else if (v.is_number_unsigned() || v.is_number_integer())
+      v = 7u;
+    else if (v.is_number() || v.is_null())
+      v = 7.25;
+    else if (v.is_string())
+      v = "s-" + key;
+    else if (v.is_array() && !v.empty() && v[0].is_string())
+      v = carenav::Json::array({"a", "b"});
+    else if (v.is_array())
+      v = carenav::Json::array({1.5, 2.5});
+    else
+      ADD_FAILURE() << key << ": " << v;
+  }
+  EXPECT_EQ(nav::RunMetrics::fromJson(j).toJsonValue(true), j);
+}
+
 TEST(RunMetricsJson, SummaryKeepsItsKeysAndTypes) {
   const carenav::Json j = sample().toJsonValue();
   EXPECT_FALSE(j.contains("outputs"));
