@@ -21,6 +21,8 @@ packages=(
   dpkg-dev file
   # command line, tests, benchmarks
   libcli11-dev libgtest-dev libbenchmark-dev
+  # JSON written and read (summaries, results between processes)
+  nlohmann-json3-dev
 )
 
 missing=()

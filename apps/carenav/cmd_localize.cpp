@@ -2,11 +2,11 @@
 //                  (--init x,y,deg[,sx,sy,sdeg] | --global | --in-room NAME) --out DIR [--ref
 //                  GT.tum]
 #include "commands.h"
-#include "localize_start.h"
 
 #include <carenav/common/profile.h>
 #include <carenav/localization/localize_job.h>
 #include <carenav/places/places.h>
+#include <carenav/places/places_report.h>
 
 #include <iostream>
 
@@ -20,26 +20,6 @@ struct LocalizeArgs {
   double map_resolution = 0.05;
   std::vector<std::string> sets;
 };
-
-}  // namespace
-
-/** The --in-room region: the named room of a places file. */
-localization::LocalizeJobOptions::Region roomRegion(const std::string& places_file,
-                                                    const std::string& name) {
-  const places::PlacesFile f = places::readPlacesFile(places_file);
-  const places::Room* room = f.findRoom(name);
-  if (!room) {
-    std::string known;
-    for (const auto& r : f.rooms) known += (known.empty() ? "" : ", ") + r.name;
-    throw InputError(places_file + ": no room named '" + name +
-                     "' (rooms: " + (known.empty() ? "none" : known) + ")");
-  }
-  return {room->name, [poly = room->polygon](double x, double y) {
-            return places::pointInPolygon(poly, x, y);
-          }};
-}
-
-namespace {
 
 void addLocalizeCommand(CLI::App& app, const GlobalOptions& g) {
   auto a = std::make_shared<LocalizeArgs>();
@@ -84,9 +64,11 @@ void addLocalizeCommand(CLI::App& app, const GlobalOptions& g) {
     o.map_resolution = a->map_resolution;
     o.progress = !g.quiet;
     if (!a->init.empty()) o.init = localization::parseInitialPose(a->init);
-    if (!a->room.empty())
-      o.region = roomRegion(
+    if (!a->room.empty()) {
+      const places::RoomArea room = places::readRoomArea(
           a->places_file.empty() ? places::placesPathForMap(a->map) : a->places_file, a->room);
+      o.region = {room.name, room.inside};
+    }
     const auto r = localization::runLocalize(o);
     if (!g.quiet) {
       const auto& f = r.track.back();

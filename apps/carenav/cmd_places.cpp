@@ -7,6 +7,7 @@
 #include <carenav/io/map_io.h>
 #include <carenav/localization/localize_job.h>
 #include <carenav/places/places.h>
+#include <carenav/places/places_report.h>
 
 #include <array>
 #include <cerrno>
@@ -18,7 +19,6 @@
 #include <sstream>
 
 #include "commands.h"
-#include "localize_start.h"
 
 namespace carenav::app {
 
@@ -76,6 +76,13 @@ void save(const PlacesFile& f, const std::string& path, const GlobalOptions& g) 
   if (!g.quiet) std::cerr << "[places] wrote " << path << "\n";
 }
 
+/** The --in-room region of localisation. */
+localization::LocalizeJobOptions::Region inRoom(const std::string& places_file,
+                                                const std::string& name) {
+  const places::RoomArea room = places::readRoomArea(places_file, name);
+  return {room.name, room.inside};
+}
+
 std::string fmt(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.3f", v);
@@ -107,7 +114,7 @@ std::array<double, 3> poseAtEndOfRawlog(const Args& a, const GlobalOptions& g) {
   if (!a.init.empty())
     o.init = localization::parseInitialPose(a.init);
   else if (!a.in_room.empty())
-    o.region = roomRegion(a.f.placesPath(), a.in_room);
+    o.region = inRoom(a.f.placesPath(), a.in_room);
   else
     o.global = true;
   const auto r = localization::runLocalize(o);
@@ -127,14 +134,8 @@ std::array<double, 3> poseAtEndOfRawlog(const Args& a, const GlobalOptions& g) {
   return {e.x, e.y, e.yaw * 180 / M_PI};
 }
 
-void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
-  auto* cmd = app.add_subcommand(
-      "places",
-      "Rooms (named polygons) and places (named poses) on a map, kept in MAP's .places.yaml: "
-      "edit, list, locate a point, check against the map, draw, and turn names into goals");
-  cmd->require_subcommand(1);
-
-  // ---- add-room
+/** `places add-room`: a room from its corners or a rectangle. */
+void addAddRoom(CLI::App* cmd, const GlobalOptions& g) {
   struct AddRoomArgs {
     FileArgs f;
     std::string name, polygon, rect;
@@ -170,8 +171,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     save(f, path, g);
     std::cout << "room \"" << r.name << "\" added (" << r.polygon.size() << " corners)\n";
   });
+}
 
-  // ---- add-place
+/** `places add-place`: a place from its pose, or from where a rawlog ends (--here). */
+void addAddPlace(CLI::App* cmd, const GlobalOptions& g) {
   struct AddPlaceArgs {
     FileArgs f;
     std::string name, pose, kind = "place", room;
@@ -240,8 +243,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     if (!room && !g.quiet)
       std::cerr << "[places] warning: \"" << p.name << "\" lies outside every room\n";
   });
+}
 
-  // ---- rename / remove
+/** `places rename / remove`: rename and remove, references following. */
+void addRenameAndRemove(CLI::App* cmd, const GlobalOptions& g) {
   struct RenameArgs {
     FileArgs f;
     std::string old_name, new_name;
@@ -275,8 +280,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     save(f, path, g);
     std::cout << "\"" << rm->name << "\" removed\n";
   });
+}
 
-  // ---- list
+/** `places list`: every room and its places. */
+void addList(CLI::App* cmd) {
   struct ListArgs {
     FileArgs f;
     bool json = false;
@@ -288,56 +295,13 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
   list->callback([ls] {
     const std::string path = ls->f.placesPath();
     const PlacesFile f = places::readPlacesFile(path);
-    if (ls->json) {
-      JsonWriter j;
-      j.beginObject().key("file").value(path).key("rooms").beginArray();
-      for (const auto& r : f.rooms) {
-        j.beginObject().key("name").value(r.name).key("polygon").beginArray();
-        for (const auto& p : r.polygon) j.beginArray().value(p.x).value(p.y).endArray();
-        j.endArray().key("default_place");
-        if (r.default_place.empty())
-          j.null();
-        else
-          j.value(r.default_place);
-        j.endObject();
-      }
-      j.endArray().key("places").beginArray();
-      for (const auto& p : f.places) {
-        j.beginObject().key("name").value(p.name);
-        j.key("x").value(p.x).key("y").value(p.y).key("heading_deg").value(p.heading_deg);
-        j.key("kind").value(places::placeKindName(p.kind)).key("room");
-        if (const auto* r = f.roomOf(p))
-          j.value(r->name);
-        else
-          j.null();
-        j.endObject();
-      }
-      j.endArray().endObject();
-      std::cout << j.str() << "\n";
-      return;
-    }
-    std::cout << path << ": " << f.rooms.size() << " rooms, " << f.places.size() << " places\n";
-    auto placeLine = [](const places::Place& p) {
-      std::cout << "    " << p.name << "  (" << fmt(p.x) << ", " << fmt(p.y) << ", "
-                << fmt(p.heading_deg) << " deg)  " << places::placeKindName(p.kind) << "\n";
-    };
-    for (const auto& r : f.rooms) {
-      std::cout << "  room " << r.name;
-      if (!r.default_place.empty()) std::cout << "  (default: " << r.default_place << ")";
-      std::cout << "\n";
-      for (const auto& p : f.places)
-        if (f.roomOf(p) == &r) placeLine(p);
-    }
-    bool header = false;
-    for (const auto& p : f.places)
-      if (!f.roomOf(p)) {
-        if (!header) std::cout << "  in no room:\n";
-        header = true;
-        placeLine(p);
-      }
+    std::cout << (ls->json ? dumpJson(places::listJson(f, path)) + "\n"
+                           : places::listText(f, path));
   });
+}
 
-  // ---- where
+/** `places where`: the room at a point and the nearest place. */
+void addWhere(CLI::App* cmd) {
   struct WhereArgs {
     FileArgs f;
     std::string at;
@@ -355,31 +319,13 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     const auto v = numbers(wh->at, "point", 2);
     const PlacesFile f = places::readPlacesFile(wh->f.placesPath());
     const places::WhereResult w = places::where(f, v[0], v[1]);
-    if (wh->json) {
-      JsonWriter j;
-      j.beginObject().key("x").value(v[0]).key("y").value(v[1]).key("room");
-      if (w.room)
-        j.value(w.room->name);
-      else
-        j.null();
-      j.key("nearest_place");
-      if (w.nearest)
-        j.value(w.nearest->name);
-      else
-        j.null();
-      j.key("distance").value(w.nearest ? w.distance : std::nan(""));
-      j.endObject();
-      std::cout << j.str() << "\n";
-      return;
-    }
-    std::cout << "room: " << (w.room ? w.room->name : std::string("(none)")) << "\n";
-    if (w.nearest)
-      std::cout << "nearest place: " << w.nearest->name << " (" << fmt(w.distance) << " m)\n";
-    else
-      std::cout << "nearest place: (none)\n";
+    std::cout << (wh->json ? dumpJson(places::whereJson(v[0], v[1], w)) + "\n"
+                           : places::whereText(w));
   });
+}
 
-  // ---- check
+/** `places check`: the rooms and places against the map; exit 2 on any problem. */
+void addCheck(CLI::App* cmd) {
   struct CheckArgs {
     FileArgs f;
     double radius = 0.35;
@@ -415,27 +361,19 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     const PlacesFile f = places::readPlacesFile(path);
     const auto grid = ck->f.grid();
     const auto problems = places::checkPlaces(f, grid, cp);
-    if (ck->json) {
-      JsonWriter j;
-      j.beginObject().key("file").value(path).key("map").value(ck->f.map);
-      j.key("turn_radius").value(cp.turn_radius).key("problems").beginArray();
-      for (const auto& pr : problems)
-        j.beginObject().key("kind").value(pr.kind).key("what").value(pr.what).endObject();
-      j.endArray().endObject();
-      std::cout << j.str() << "\n";
-    } else {
-      for (const auto& pr : problems) std::cout << pr.kind << ": " << pr.what << "\n";
-      if (problems.empty())
-        std::cout << path << ": " << f.rooms.size() << " rooms, " << f.places.size()
-                  << " places, no problem\n";
-    }
+    std::cout << (ck->json
+                      ? dumpJson(places::checkJson(path, ck->f.map, cp.turn_radius, problems)) +
+                            "\n"
+                      : places::checkText(f, path, problems));
     std::cout.flush();  // the list before the error line on a shared terminal
     if (!problems.empty())
       throw InputError(path + ": " + std::to_string(problems.size()) + " problem" +
                        (problems.size() == 1 ? "" : "s"));
   });
+}
 
-  // ---- render
+/** `places render`: the map with its rooms and places as a PNG. */
+void addRender(CLI::App* cmd, const GlobalOptions& g) {
   struct RenderArgs {
     FileArgs f;
     std::string out;
@@ -457,8 +395,10 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     places::renderPlacesPng(f, grid, rd->out, ro);
     if (!g.quiet) std::cerr << "[places] wrote " << rd->out << "\n";
   });
+}
 
-  // ---- goal
+/** `places goal`: a name to a goal pose. */
+void addGoal(CLI::App* cmd) {
   struct GoalArgs {
     FileArgs f;
     std::string name;
@@ -476,20 +416,24 @@ void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
     const PlacesFile f = places::readPlacesFile(gl->f.placesPath());
     const auto grid = gl->f.grid();
     const places::Goal r = places::resolveGoal(f, grid, gl->name);
-    if (gl->json) {
-      JsonWriter j;
-      j.beginObject().key("name").value(gl->name).key("x").value(r.x).key("y").value(r.y);
-      j.key("heading_deg").value(r.heading_deg).key("room").value(r.room).key("place");
-      if (r.place.empty())
-        j.null();
-      else
-        j.value(r.place);
-      j.endObject();
-      std::cout << j.str() << "\n";
-    } else {
-      std::cout << fmt(r.x) << " " << fmt(r.y) << " " << fmt(r.heading_deg) << "\n";
-    }
+    std::cout << (gl->json ? dumpJson(places::goalJson(gl->name, r)) + "\n" : places::goalText(r));
   });
+}
+
+void addPlacesCommand(CLI::App& app, const GlobalOptions& g) {
+  auto* cmd = app.add_subcommand(
+      "places",
+      "Rooms (named polygons) and places (named poses) on a map, kept in MAP's .places.yaml: "
+      "edit, list, locate a point, check against the map, draw, and turn names into goals");
+  cmd->require_subcommand(1);
+  addAddRoom(cmd, g);
+  addAddPlace(cmd, g);
+  addRenameAndRemove(cmd, g);
+  addList(cmd);
+  addWhere(cmd);
+  addCheck(cmd);
+  addRender(cmd, g);
+  addGoal(cmd);
 }
 
 }  // namespace

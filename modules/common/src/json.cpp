@@ -1,142 +1,57 @@
+#include <carenav/common/errors.h>
 #include <carenav/common/json.h>
-
-#include <charconv>
-#include <cmath>
-#include <cstdio>
-#include <sstream>
 
 namespace carenav {
 
-std::string JsonWriter::escape(const std::string& s) {
-  std::string o = "\"";
-  for (unsigned char c : s) {
-    switch (c) {
-      case '"':
-        o += "\\\"";
-        break;
-      case '\\':
-        o += "\\\\";
-        break;
-      case '\n':
-        o += "\\n";
-        break;
-      case '\r':
-        o += "\\r";
-        break;
-      case '\t':
-        o += "\\t";
-        break;
-      default:
-        if (c < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", c);
-          o += buf;
-        } else {
-          o += static_cast<char>(c);
-        }
-    }
-  }
-  return o + "\"";
+std::string dumpJson(const Json& j, bool pretty) {
+  return j.dump(pretty ? 2 : -1, ' ', false, Json::error_handler_t::replace);
 }
 
-void JsonWriter::newline() {
-  if (!pretty_) return;
-  out_ += '\n';
-  out_.append(2 * first_.size(), ' ');
-}
-
-void JsonWriter::beforeValue() {
-  if (after_key_) {
-    after_key_ = false;
-    return;
-  }
-  if (!first_.empty()) {
-    if (!first_.back()) out_ += ',';
-    first_.back() = false;
-    newline();
+Json parseJson(const std::string& text, const std::string& origin) {
+  try {
+    return Json::parse(text);
+  } catch (const Json::parse_error& e) {
+    throw InputError(origin + ": not JSON (" + e.what() + ")");
   }
 }
 
-JsonWriter& JsonWriter::beginObject() {
-  beforeValue();
-  out_ += '{';
-  first_.push_back(true);
-  return *this;
-}
-
-JsonWriter& JsonWriter::endObject() {
-  const bool empty = first_.back();
-  first_.pop_back();
-  if (!empty) newline();
-  out_ += '}';
-  return *this;
-}
-
-JsonWriter& JsonWriter::beginArray() {
-  beforeValue();
-  out_ += '[';
-  first_.push_back(true);
-  return *this;
-}
-
-JsonWriter& JsonWriter::endArray() {
-  const bool empty = first_.back();
-  first_.pop_back();
-  if (!empty) newline();
-  out_ += ']';
-  return *this;
-}
+std::string JsonWriter::escape(const std::string& s) { return dumpJson(Json(s), false); }
 
 JsonWriter& JsonWriter::key(const std::string& k) {
-  beforeValue();
-  out_ += escape(k);
-  out_ += pretty_ ? ": " : ":";
-  after_key_ = true;
+  key_ = k;
   return *this;
 }
 
-JsonWriter& JsonWriter::value(const std::string& v) {
-  beforeValue();
-  out_ += escape(v);
-  return *this;
-}
-
-JsonWriter& JsonWriter::value(double v) {
-  beforeValue();
-  if (!std::isfinite(v)) {
-    out_ += "null";
-    return *this;
+// While a container is open only it grows, never its parent, so the
+// pointers in open_ stay valid.
+Json* JsonWriter::place(Json v) {
+  if (open_.empty()) {
+    root_ = std::move(v);
+    return &root_;
   }
-  // Shortest text that reads back as the same double: UNIX times keep
-  // their microseconds, 0.1 stays 0.1.
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  out_.append(buf, r.ptr);
+  Json& c = *open_.back();
+  if (c.is_array()) {
+    c.push_back(std::move(v));
+    return &c.back();
+  }
+  Json& slot = c[key_];
+  slot = std::move(v);
+  return &slot;
+}
+
+JsonWriter& JsonWriter::open(Json v) {
+  open_.push_back(place(std::move(v)));
   return *this;
 }
 
-JsonWriter& JsonWriter::value(int64_t v) {
-  beforeValue();
-  out_ += std::to_string(v);
+JsonWriter& JsonWriter::close() {
+  open_.pop_back();
   return *this;
 }
 
-JsonWriter& JsonWriter::value(uint64_t v) {
-  beforeValue();
-  out_ += std::to_string(v);
-  return *this;
-}
-
-JsonWriter& JsonWriter::value(bool v) {
-  beforeValue();
-  out_ += v ? "true" : "false";
-  return *this;
-}
-
-JsonWriter& JsonWriter::null() {
-  beforeValue();
-  out_ += "null";
-  return *this;
+const std::string& JsonWriter::str() const {
+  text_ = dumpJson(root_, pretty_);
+  return text_;
 }
 
 }  // namespace carenav

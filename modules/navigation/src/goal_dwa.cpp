@@ -38,7 +38,7 @@ class GoalDwa final : public LocalPlanner {
   PlannerOutput plan(const PlannerInput& in) override {
     PlannerOutput out;
     if (!in.map || (in.path.empty() && !in.goal)) {
-      out.note = "no route";
+      out.mark(PlanStatus::NoRoute);
       return out;
     }
     std::vector<TPoint2D> path = in.path;
@@ -54,7 +54,7 @@ class GoalDwa final : public LocalPlanner {
       target_heading = in.goal->phi;
       if (std::abs(angleDiff(target_heading, in.pose.phi)) < mrpt::DEG2RAD(p_.goal_tolerance_deg)) {
         out.ok = true;
-        out.note = "goal reached";
+        out.mark(PlanStatus::GoalReached);
         return out;
       }
       turn_only = true;
@@ -74,7 +74,7 @@ class GoalDwa final : public LocalPlanner {
       if (samples.empty())
         for (const Twist& s : sampleWindow(win, p_))
           if (std::abs(s.v - (win.v_lo > 0 ? win.v_lo : win.v_hi)) < 1e-9) samples.push_back(s);
-      out.note = "turn in place";
+      out.mark(PlanStatus::TurnInPlace);
     }
     const double cap = p_.clearance_influence;
     auto evaluate = [&](const std::vector<Twist>& candidates) {
@@ -122,9 +122,9 @@ class GoalDwa final : public LocalPlanner {
       for (const Twist& s : sampleWindow(win, p_))
         if (std::abs(s.v) < 1e-9 && std::abs(s.w) > 1e-6) turns.push_back(s);
       evaluate(turns);
-      if (out.ok) out.note = "turn in place (blocked ahead)";
+      if (out.ok) out.mark(PlanStatus::TurnInPlace, "turn in place (blocked ahead)");
     }
-    if (!out.ok) out.note = "no admissible trajectory";
+    if (!out.ok) out.mark(PlanStatus::NoAdmissible);
     return out;
   }
 
@@ -140,6 +140,9 @@ class GoalDwa final : public LocalPlanner {
  *  (x, y); the last point when the path is shorter. */
 TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead,
                         double corner, double reached) {
+  // No segment to walk along (GoalDwa's path for a goal with an empty route
+  // is the goal alone).
+  if (path.size() < 2) return path.empty() ? TPoint2D{x, y} : path.front();
   size_t seg = 0;
   double best = std::numeric_limits<double>::infinity(), best_u = 0;
   for (size_t i = 0; i + 1 < path.size(); ++i) {

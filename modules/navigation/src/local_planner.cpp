@@ -8,6 +8,26 @@
 
 namespace carenav::navigation {
 
+const char* planStatusText(PlanStatus s) {
+  switch (s) {
+    case PlanStatus::Moving:
+      return "";
+    case PlanStatus::TurnInPlace:
+      return "turn in place";
+    case PlanStatus::GoalReached:
+      return "goal reached";
+    case PlanStatus::NoRoute:
+      return "no route";
+    case PlanStatus::NoAdmissible:
+      return "no admissible trajectory";
+    case PlanStatus::NoUserCommand:
+      return "no user command";
+    case PlanStatus::UserStopped:
+      return "user stopped";
+  }
+  return "?";
+}
+
 TPose2D integrateArc(const TPose2D& p, double v, double w, double t) {
   if (std::abs(w) < 1e-9)
     return {p.x + v * t * std::cos(p.phi), p.y + v * t * std::sin(p.phi), p.phi};

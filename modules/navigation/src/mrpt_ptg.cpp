@@ -117,7 +117,7 @@ class MrptPtg final : public LocalPlanner {
   PlannerOutput plan(const PlannerInput& in) override {
     PlannerOutput out;
     if (!in.map || (in.path.empty() && !in.goal)) {
-      out.note = "no route";
+      out.mark(PlanStatus::NoRoute);
       return out;
     }
     std::vector<TPoint2D> path = in.path;
@@ -207,14 +207,14 @@ class MrptPtg final : public LocalPlanner {
       }
     }
     if (!found) {
-      out.note = "no admissible trajectory";
+      out.mark(PlanStatus::NoAdmissible);
       return out;
     }
     const Family& fam = families_[best.family];
     const auto cmd = fam.ptg->directionToMotionCommand(best.k);
     const auto* dd = dynamic_cast<const mrpt::kinematics::CVehicleVelCmd_DiffDriven*>(cmd.get());
     if (!dd) {
-      out.note = "no admissible trajectory";
+      out.mark(PlanStatus::NoAdmissible);
       return out;
     }
     // Secure-distance ramp on the free distance of the chosen path.
@@ -233,7 +233,7 @@ class MrptPtg final : public LocalPlanner {
     if (std::abs(out.cmd.w) < 1e-3) out.cmd.w = 0;
     out.ok = out.cmd.v != 0 || out.cmd.w != 0;
     if (!out.ok) {
-      out.note = "no admissible trajectory";
+      out.mark(PlanStatus::NoAdmissible);
       return out;
     }
     // Turning on the spot towards a target behind: the paths to its left
@@ -330,7 +330,7 @@ class MrptPtg final : public LocalPlanner {
     const double err = angleDiff(in.goal->phi, in.pose.phi);
     if (std::abs(err) < mrpt::DEG2RAD(p_.goal_tolerance_deg)) {
       out.ok = true;
-      out.note = "goal reached";
+      out.mark(PlanStatus::GoalReached);
       return out;
     }
     double w = std::clamp(q_.goal_turn_gain * err, -r_.w_max, r_.w_max);
@@ -338,7 +338,7 @@ class MrptPtg final : public LocalPlanner {
     if (std::abs(w) < 0.1) w = std::copysign(std::min(0.1, r_.w_max), err);
     out.cmd = {0, w};
     out.ok = true;
-    out.note = "turn in place";
+    out.mark(PlanStatus::TurnInPlace);
     out.evaluated = out.admissible = 1;
     out.trajectories.push_back(
         rollout(*in.map, in.pose, out.cmd, p_.sim_time, p_.sim_step, p_.clearance_influence, 0));

@@ -304,7 +304,7 @@ Navigator::Cycle Navigator::cycle(double now) {
     c.plan = turnInPlace(in);
   } else {
     c.plan = planner_->plan(in);
-    c.goal_reached = goal_ && c.plan.ok && c.plan.note == "goal reached";
+    c.goal_reached = goal_ && c.plan.ok && c.plan.status == PlanStatus::GoalReached;
     // Recovery behaviours (goal robots): boxed in or no progress.
     if (goal_ && !planner_->needsUserIntent()) {
       recovery_.recordPose(odom_);

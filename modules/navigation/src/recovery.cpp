@@ -271,7 +271,7 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
     have_best_ = true;
   }
   if (phase_ == Phase::Idle) {
-    if (plan.ok && plan.note == "goal reached") return std::nullopt;
+    if (plan.ok && plan.status == PlanStatus::GoalReached) return std::nullopt;
     if (blocked) {
       if (!blocked_since_) blocked_since_ = now;
     } else {

@@ -79,24 +79,27 @@ double brakingScale(const LocalCostmap& map, const TPose2D& pose, const Twist& c
 
 SafetyDecision SafetySupervisor::apply(const SafetyInput& in) const {
   SafetyDecision d;
-  auto stop = [&](const std::string& why) {
+  auto stop = [&](SafetyRule rule, const std::string& why) {
     d.cmd = {};
     d.action = SafetyAction::Stop;
+    d.rule = rule;
     d.reason = why;
     return d;
   };
   if (!in.last_scan_time || in.now - *in.last_scan_time > p_.sensor_timeout)
-    return stop("stale sensor data");
+    return stop(SafetyRule::StaleSensor, "stale sensor data");
   if (!in.last_odom_time || in.now - *in.last_odom_time > p_.odom_timeout)
-    return stop("stale odometry");
+    return stop(SafetyRule::StaleOdometry, "stale odometry");
   if (in.needs_intent) {
     if (!in.last_intent_time || !in.user || in.now - *in.last_intent_time > p_.intent_timeout)
-      return stop("stale user command");
+      return stop(SafetyRule::StaleIntent, "stale user command");
     if (std::abs(in.user->v) < p_.intent_deadband && std::abs(in.user->w) < p_.intent_deadband)
-      return stop("user stopped");
+      return stop(SafetyRule::UserStopped, "user stopped");
   }
-  if (!in.plan.ok) return stop(in.plan.note.empty() ? "no admissible trajectory" : in.plan.note);
-  if (!in.map) return stop("no local map");
+  if (!in.plan.ok)
+    return stop(SafetyRule::NoPlan,
+                in.plan.note.empty() ? "no admissible trajectory" : in.plan.note);
+  if (!in.map) return stop(SafetyRule::NoLocalMap, "no local map");
   Twist c = in.plan.cmd;
   c.v = std::clamp(c.v, r_.v_min, r_.v_max);
   c.w = std::clamp(c.w, -r_.w_max, r_.w_max);
@@ -107,11 +110,12 @@ SafetyDecision SafetySupervisor::apply(const SafetyInput& in) const {
   }
   const double margin = in.plan.margin >= 0 ? in.plan.margin : r_.safe_distance;
   const double s = brakingScale(*in.map, in.pose, c, r_, p_.sim_step, margin);
-  if (s <= 1e-3) return stop("cannot brake before the obstacle ahead");
+  if (s <= 1e-3) return stop(SafetyRule::CannotBrake, "cannot brake before the obstacle ahead");
   d.cmd = {c.v * s, c.w * s};
   d.action = s < 1 ? SafetyAction::Slow : SafetyAction::Pass;
   if (s < 1 || c.v != in.plan.cmd.v || c.w != in.plan.cmd.w) {
     d.action = SafetyAction::Slow;
+    d.rule = s < 1 ? SafetyRule::Braking : SafetyRule::Limits;
     d.reason =
         s < 1 ? "slowed to brake before the obstacle ahead" : "clamped to the robot's limits";
   }

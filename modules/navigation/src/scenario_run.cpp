@@ -109,6 +109,12 @@ std::string fmt(double v, int prec = 3) {
   return b;
 }
 
+/** Resident memory into the run's samples (none where /proc cannot tell). */
+void sampleMemory(RunMetrics& m) {
+  const double mb = residentMegabytes();
+  if (std::isfinite(mb)) m.rss_mb.push_back(mb);
+}
+
 /** How a patrol's leg ended: the robot reported the goal reached (checked
  *  against the truth), or it gave up or ran out of time. */
 enum class LegEnd { Reported, Failed };
@@ -214,8 +220,9 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     throw InputError("--intent " + o.intent->describe() +
                      ": the user drives the walker; give no goal with it");
   if (!walker && !goal_mode)
-    throw InputError(sc.file + ": plugin " + nav.plugin +
-                     " drives to a goal; this scenario scripts a user (use user-intent-dwa)");
+    throw PluginMismatchError(sc.file + ": plugin " + nav.plugin +
+                              " drives to a goal; this scenario scripts a user (use "
+                              "user-intent-dwa)");
 
   RunMetrics m;
   m.scenario = sc.name;
@@ -338,7 +345,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
     const auto per = [&](double s) {
       return std::max<size_t>(1, std::llround(s * o.control_rate));
     };
-    if (k % per(kMemorySampleSeconds) == 0) m.rss_mb.push_back(residentMegabytes());
+    if (k % per(kMemorySampleSeconds) == 0) sampleMemory(m);
     if ((k + 1) % per(kWindowSeconds) == 0) {
       m.work_ms_p99_windows.push_back(work_window.quantile(0.99));
       work_window.clear();
@@ -573,7 +580,7 @@ RunMetrics runScenario(const Scenario& scenario, const RunOptions& o) {
   if (work_window.count() > 0) m.work_ms_p99_windows.push_back(work_window.quantile(0.99));
   m.work_ms_p99 = work_all.quantile(0.99);
   m.work_ms_max = work_all.max();
-  m.rss_mb.push_back(residentMegabytes());
+  sampleMemory(m);
   m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   m.collisions = sim.collisions();
   m.duration_s = !patrolling && (goal_reached || intent_over || collision_end || !gave_up.empty())

@@ -19,14 +19,14 @@ class UserIntentDwa final : public LocalPlanner {
   PlannerOutput plan(const PlannerInput& in) override {
     PlannerOutput out;
     if (!in.user || !in.map) {
-      out.note = "no user command";
+      out.mark(PlanStatus::NoUserCommand);
       return out;
     }
     const Twist u = *in.user;
     // The user lets go: stop (braking is always reachable).
     if (std::abs(u.v) < p_.intent_deadband && std::abs(u.w) < p_.intent_deadband) {
       out.ok = true;
-      out.note = "user stopped";
+      out.mark(PlanStatus::UserStopped);
       return out;
     }
     const Window win = dynamicWindow(in.current, r_, p_);
@@ -75,7 +75,7 @@ class UserIntentDwa final : public LocalPlanner {
       }
       out.trajectories.push_back(tr);
     }
-    if (!out.ok) out.note = "no admissible trajectory";
+    if (!out.ok) out.mark(PlanStatus::NoAdmissible);
     return out;
   }
 

@@ -187,7 +187,7 @@ TEST(UserIntentDwa, StopsWhenTheUserLetsGoAndWhenBoxedIn) {
   EXPECT_TRUE(out.ok);
   EXPECT_EQ(out.cmd.v, 0);
   EXPECT_EQ(out.cmd.w, 0);
-  EXPECT_EQ(out.note, "user stopped");
+  EXPECT_EQ(out.status, PlanStatus::UserStopped);
   // An obstacle inside the footprint: nothing is admissible.
   Scene boxed({{-0.1, 0.0}});
   auto dwa2 = makeUserIntentDwa(boxed.nav, boxed.robot);
@@ -222,13 +222,13 @@ TEST(GoalDwa, HeadsForTheRouteAndTurnsInPlaceWhenItIsBehind) {
   ASSERT_TRUE(out.ok) << out.note;
   EXPECT_EQ(out.cmd.v, 0);
   EXPECT_NE(out.cmd.w, 0);
-  EXPECT_EQ(out.note, "turn in place");
+  EXPECT_EQ(out.status, PlanStatus::TurnInPlace);
   // At the goal with its heading: stop.
   in.path = {{0.1, 0}};
   in.goal = TPose2D{0.1, 0, 0};
   out = dwa->plan(in);
   EXPECT_TRUE(out.ok);
-  EXPECT_EQ(out.note, "goal reached");
+  EXPECT_EQ(out.status, PlanStatus::GoalReached);
   EXPECT_EQ(out.cmd.v, 0);
 }
 

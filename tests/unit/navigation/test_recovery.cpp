@@ -55,7 +55,7 @@ TEST(Recovery, BacksOutOfADeadEndAlongTheWayItCame) {
   in.pose = {0, 0, 0};
   in.path = {{-2, 0}, {0, 0}, {0, 2}};  // the route goes where the wall is
   PlannerOutput blocked;
-  blocked.note = "no admissible trajectory";
+  blocked.mark(PlanStatus::NoAdmissible);
   double t = 0;
   // Not yet: blocked for less than stuck_time.
   EXPECT_FALSE(rec.step(t, in, blocked, true, 5.0));
@@ -114,7 +114,8 @@ TEST(Recovery, NeverReversesIntoAnObstacleOverRandomScenes) {
     const int n = static_cast<int>(rng() % 6);
     for (int k = 0; k < n; ++k) {
       // posts around, behind the robot half of the time
-      const double a = (trial % 2 ? M_PI : 0) + U(rng) * M_PI / 2, d = 0.28 + std::abs(U(rng)) * 0.3;
+      const double a = (trial % 2 ? M_PI : 0) + U(rng) * M_PI / 2,
+                   d = 0.28 + std::abs(U(rng)) * 0.3;
       obs.push_back({d * std::cos(a), d * std::sin(a)});
     }
     LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));

@@ -45,12 +45,12 @@ TEST(Safety, StaleSensorsOdometryOrIntentStop) {
   auto d = sup.apply(in);
   EXPECT_EQ(d.action, SafetyAction::Stop);
   EXPECT_EQ(d.cmd.v, 0);
-  EXPECT_EQ(d.reason, "stale sensor data");
+  EXPECT_EQ(d.rule, SafetyRule::StaleSensor);
   in.last_scan_time.reset();  // never had a scan
   EXPECT_EQ(sup.apply(in).action, SafetyAction::Stop);
   in = fresh(map, {0.3, 0});
   in.last_odom_time = 10 - p.odom_timeout - 0.01;
-  EXPECT_EQ(sup.apply(in).reason, "stale odometry");
+  EXPECT_EQ(sup.apply(in).rule, SafetyRule::StaleOdometry);
   // Walker: the user's command must be fresh and non-zero.
   in = fresh(map, {0.3, 0});
   in.needs_intent = true;
@@ -58,15 +58,17 @@ TEST(Safety, StaleSensorsOdometryOrIntentStop) {
   in.last_intent_time = 9.9;
   EXPECT_EQ(sup.apply(in).action, SafetyAction::Pass);
   in.last_intent_time = 10 - p.intent_timeout - 0.01;
-  EXPECT_EQ(sup.apply(in).reason, "stale user command");
+  EXPECT_EQ(sup.apply(in).rule, SafetyRule::StaleIntent);
   in.last_intent_time = 9.9;
   in.user = Twist{0.0, 0.0};
-  EXPECT_EQ(sup.apply(in).reason, "user stopped");
+  EXPECT_EQ(sup.apply(in).rule, SafetyRule::UserStopped);
   // No admissible trajectory.
   in = fresh(map, {0.3, 0});
   in.plan.ok = false;
-  in.plan.note = "no admissible trajectory";
+  in.plan.mark(PlanStatus::NoAdmissible);
   EXPECT_EQ(sup.apply(in).action, SafetyAction::Stop);
+  EXPECT_EQ(sup.apply(in).rule, SafetyRule::NoPlan);
+  EXPECT_EQ(sup.apply(in).reason, "no admissible trajectory");  // the planner's note
 }
 
 TEST(Safety, NeverCommandsAVelocityThatCannotBrakeBeforeASeenObstacle) {

@@ -72,11 +72,31 @@ struct PlannerInput {
   std::optional<TPose2D> goal;  ///< final goal (goal navigation)
 };
 
+/** What a plan came to: the navigator and the recovery behaviours read
+ *  this, people read PlannerOutput::note. */
+enum class PlanStatus {
+  Moving,         ///< a command along the route, or as the user asks
+  TurnInPlace,    ///< turning on the spot towards the route or the goal heading
+  GoalReached,    ///< at the goal with its heading: stop
+  NoRoute,        ///< no map, or neither route nor goal
+  NoAdmissible,   ///< no admissible trajectory (the supervisor stops)
+  NoUserCommand,  ///< walker: the user gave no command yet
+  UserStopped,    ///< walker: the user's command is a stop
+};
+/** "goal reached", "no route", ...: the note of a status. */
+const char* planStatusText(PlanStatus s);
+
 /** What a planner answers. */
 struct PlannerOutput {
   bool ok = false;  ///< false: no admissible trajectory (the supervisor stops)
   Twist cmd;
+  PlanStatus status = PlanStatus::Moving;
   std::string note;  ///< why not ok, or what it did ("turn in place")
+  /** Sets the status and the note: `text`, or the status's own text. */
+  void mark(PlanStatus s, const std::string& text = "") {
+    status = s;
+    note = text.empty() ? planStatusText(s) : text;
+  }
   /** m, the margin the supervisor keeps before a contact for this command
    *  (its braking rule); negative: the robot's safe_distance. A recovery's
    *  crawl out of a wedge asks for its smaller backup_margin. */
@@ -131,7 +151,8 @@ class PlannerRegistry {
  *  `corner` (rad) below pi the look-ahead stops at a vertex where the
  *  polyline turns by more than that, until (x, y) is within `reached` of
  *  it: the robot goes to the corner instead of cutting it (the approach
- *  point of a narrow passage is such a corner: it enters on the axis). */
+ *  point of a narrow passage is such a corner: it enters on the axis).
+ *  A one-point path gives its point, an empty one (x, y). */
 TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead,
                         double corner = M_PI, double reached = 0.15);
 

@@ -46,10 +46,25 @@ enum class SafetyAction {
 };
 const char* safetyActionName(SafetyAction a);
 
+/** The rule that stopped or changed the command (numbers of apply's list). */
+enum class SafetyRule {
+  None,           ///< passed unchanged
+  StaleSensor,    ///< 1
+  StaleOdometry,  ///< 2
+  StaleIntent,    ///< 3: the user's command is too old
+  UserStopped,    ///< 3: below the deadband
+  NoPlan,         ///< 4: reason is the planner's note
+  NoLocalMap,
+  CannotBrake,  ///< 5: stop
+  Braking,      ///< 5: slowed
+  Limits,       ///< 6: clamped to the velocity limits
+};
+
 struct SafetyDecision {
   Twist cmd;
   SafetyAction action = SafetyAction::Stop;
-  std::string reason;  ///< for Slow and Stop
+  SafetyRule rule = SafetyRule::None;
+  std::string reason;  ///< for Slow and Stop: the rule in words (the navlog's column)
 };
 
 /** Rules, in order:

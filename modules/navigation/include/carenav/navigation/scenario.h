@@ -3,6 +3,7 @@
 #pragma once
 
 #include <carenav/common/errors.h>
+#include <carenav/common/json_fwd.h>
 #include <carenav/common/robot.h>
 #include <carenav/navigation/intent.h>
 #include <carenav/navigation/navigation_params.h>
@@ -77,6 +78,14 @@ Scenario parseScenario(const std::string& text, const std::string& origin,
  *  goal given by place name, or a typo the caller reports). */
 std::optional<TPose2D> parsePoseText(const std::string& text);
 
+/** runScenario's refusal of a plugin that does not fit the scenario (a
+ *  plugin that drives to a goal on a scenario that scripts a user): alone it
+ *  is bad input, in a side-by-side run of several plugins the pair is skipped. */
+class PluginMismatchError : public InputError {
+ public:
+  using InputError::InputError;
+};
+
 /** Metrics of one run ([Conceicao16, Sec. 6.1]). */
 struct RunMetrics {
   std::string scenario, plugin;
@@ -115,6 +124,15 @@ struct RunMetrics {
   std::vector<double> rss_mb;
   std::vector<std::string> outputs;
   std::string toJson() const;
+  /** toJson() as a value (summary.json, `--json`: a non-finite
+   *  min_clearance_m is written 0, a NaN null); `complete` adds
+   *  entered_forbidden and outputs and keeps an infinite min_clearance_m
+   *  (null), for passing a run between processes. */
+  Json toJsonValue(bool complete = false) const;
+  /** Reads toJsonValue(true) back (null min_clearance_m: infinity, other
+   *  nulls: NaN); missing keys keep their defaults. Throws InputError on a
+   *  value of the wrong type. */
+  static RunMetrics fromJson(const Json& j);
   /** Lists run.png (`png`, written by the caller) and navlog.csv of
    *  `out_dir` as outputs, writes summary.json there (listed too). */
   void writeSummary(const std::string& out_dir, const std::string& png);
