@@ -2,7 +2,7 @@
 # Builds carenav's libFuzzer harnesses (clang, ASan + UBSan) and runs each for
 # SECONDS seconds (default 60) on a seed corpus made from the repository's own
 # files. Findings (crash-*, leak-*, timeout-*, oom-*) are left in
-# build-fuzz/findings/<harness>/; the summary line of each run is printed.
+# build-san/findings/<harness>/; the summary line of each run is printed.
 #   scripts/fuzz.sh [SECONDS] [HARNESS...]     (tests/fuzz/README.md)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,12 +10,8 @@ secs=${1:-60}
 shift || true
 all=(profile places world scenario rosmap image tum cloud carmen rawlog bridge)
 [ $# -gt 0 ] && harnesses=("$@") || harnesses=("${all[@]}")
-B=build-fuzz
-command -v clang++-14 >/dev/null || { echo "fuzz.sh: needs clang++-14 and libclang-rt-14-dev (apt-get install clang-14 libclang-rt-14-dev)" >&2; exit 1; }
-if [ ! -f $B/CMakeCache.txt ]; then
-  cmake -S . -B $B -DCMAKE_CXX_COMPILER=clang++-14 -DCARENAV_FUZZ=ON -DCARENAV_BUILD_BENCH=OFF \
-    -DCARENAV_BUILD_TESTS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-fi
+B=build-san  # shared with scripts/sanitize.sh (the test suite under ASan + UBSan)
+. scripts/san_configure.sh
 cmake --build $B -j"$(nproc)" --target carenav $(printf 'fuzz_%s ' "${harnesses[@]}") >/dev/null
 
 corpus() {  # corpus NAME: the seed inputs of one harness, from the repository

@@ -94,8 +94,9 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
     }
     return std::pair<int, int>{ix, iy};
   };
-  const auto [sx, sy] = cellOf(s, "start");
-  const auto [gx, gy] = cellOf(g, "goal");
+  // Plain ints, not structured bindings: lambdas below capture them (C++17).
+  const std::pair<int, int> s_cell = cellOf(s, "start"), g_cell = cellOf(g, "goal");
+  const int sx = s_cell.first, sy = s_cell.second, gx = g_cell.first, gy = g_cell.second;
   // Start and goal may lie closer to a wall than the robot's radius (a robot
   // parked against a wall): cells within the radius of them that are free
   // are passable, at a high cost, so the route can leave and reach them.
