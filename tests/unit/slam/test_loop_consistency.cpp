@@ -64,8 +64,8 @@ Scenario makeScenario(size_t n_groups, size_t group, unsigned seed) {
   }
   for (size_t i = lap; i < 2 * lap; i += 4) {
     const CPose2D t = s.truth[i] - s.truth[i - lap];
-    addLoop(s, i - lap, i, CPose2D(t.x() + nxy(rng), t.y() + nxy(rng), t.phi()), 0.05, 1 * kDeg,
-            true);
+    const double dy = nxy(rng), dx = nxy(rng);  // gcc's order, fixed (see square_laps.h)
+    addLoop(s, i - lap, i, CPose2D(t.x() + dx, t.y() + dy, t.phi()), 0.05, 1 * kDeg, true);
   }
   std::uniform_int_distribution<size_t> pick(lap + 2, 2 * lap - 1 - group);
   std::uniform_real_distribution<double> off(1.5, 2.5), ang(-180, 180), dth(-8, 8);

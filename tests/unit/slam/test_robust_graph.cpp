@@ -47,8 +47,9 @@ Scenario makeScenario(size_t n_wrong, unsigned seed) {
   for (size_t i = lap; i < 2 * lap; i += 4) {
     const size_t j = i - lap;
     const CPose2D t = s.truth[i] - s.truth[j];
-    s.graph.insertEdge(j, i,
-                       edge(CPose2D(t.x() + nxy(rng), t.y() + nxy(rng), t.phi()), 0.05, 1 * kDeg));
+    // One draw per statement (argument order is the compiler's; gcc's kept).
+    const double ny = nxy(rng), nx = nxy(rng);
+    s.graph.insertEdge(j, i, edge(CPose2D(t.x() + nx, t.y() + ny, t.phi()), 0.05, 1 * kDeg));
     s.loops.emplace_back(j, i);
   }
   // Wrong closures: a place of the second lap taken for one of the first lap
@@ -60,8 +61,8 @@ Scenario makeScenario(size_t n_wrong, unsigned seed) {
     const size_t i = pick(rng), j = i - lap + 1;  // not a pair the correct ones use
     const CPose2D t = s.truth[i] - s.truth[j];
     const double a = ang(rng) * kDeg * 20;
-    const CPose2D z(t.x() + off(rng) * std::cos(a), t.y() + off(rng) * std::sin(a),
-                    t.phi() + ang(rng) * kDeg);
+    const double dphi = ang(rng), oy = off(rng), ox = off(rng);  // gcc's order, fixed
+    const CPose2D z(t.x() + ox * std::cos(a), t.y() + oy * std::sin(a), t.phi() + dphi * kDeg);
     s.graph.insertEdge(j, i, edge(z, 0.01, 0.2 * kDeg));
     s.loops.emplace_back(j, i);
     s.wrong.emplace_back(j, i);
