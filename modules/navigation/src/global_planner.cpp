@@ -81,9 +81,13 @@ bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip)
 
 std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) const {
   auto cellOf = [&](const TPoint2D& p, const char* what) {
-    const int ix = map_.x2idx(p.x), iy = map_.y2idx(p.y);
     std::ostringstream m;
     m << what << " (" << p.x << ", " << p.y << ")";
+    // Bounds in metres first: MRPT's x2idx converts to int unchecked (UBSan:
+    // a 1e300 m start was undefined behaviour before it was called outside).
+    const bool on_map = p.x >= map_.getXMin() && p.x < map_.getXMax() && p.y >= map_.getYMin() &&
+                        p.y < map_.getYMax();
+    const int ix = on_map ? map_.x2idx(p.x) : -1, iy = on_map ? map_.y2idx(p.y) : -1;
     if (ix < 0 || iy < 0 || ix >= nx_ || iy >= ny_) {
       m << " is outside the map";
       throw InputError(m.str());
