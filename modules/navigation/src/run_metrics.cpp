@@ -4,9 +4,14 @@
 #include <carenav/navigation/scenario.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
 #include <limits>
 
 namespace carenav::navigation {
+
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -28,7 +33,7 @@ void read(const Json& j, const char* key, T& out, T if_null = T{}) {
 
 }  // namespace
 
-// The summary's keys are those of toJson() (beside runScenario).
+// The summary's keys are those of toJson() (below).
 Json RunMetrics::toJsonValue(bool complete) const {
   Json j = parseJson(toJson(), "run metrics");
   if (complete) {
@@ -78,6 +83,65 @@ RunMetrics RunMetrics::fromJson(const Json& j) {
   read(j, "entered_forbidden", m.entered_forbidden);
   read(j, "outputs", m.outputs);
   return m;
+}
+
+void RunMetrics::writeSummary(const std::string& out_dir, const std::string& png) {
+  outputs.push_back(png);
+  outputs.push_back((fs::path(out_dir) / "navlog.csv").string());
+  const std::string js = (fs::path(out_dir) / "summary.json").string();
+  std::ofstream(js) << toJson() << "\n";
+  outputs.push_back(js);
+}
+
+void RunMetrics::failWith(const InputError& error) const {
+  for (const auto& f : outputs) std::cerr << "[navigate] wrote " << f << "\n";
+  throw error;
+}
+
+std::string RunMetrics::toJson() const {
+  JsonWriter j;
+  j.beginObject();
+  j.key("scenario").value(scenario);
+  j.key("plugin").value(plugin);
+  if (!goal_name.empty()) j.key("goal_name").value(goal_name);
+  j.key("success").value(success);
+  j.key("outcome").value(outcome);
+  j.key("collisions").value(static_cast<uint64_t>(collisions));
+  j.key("min_clearance_m").value(std::isfinite(min_clearance_m) ? min_clearance_m : 0.0);
+  j.key("mean_clearance_m").value(mean_clearance_m);
+  j.key("duration_s").value(duration_s);
+  j.key("path_length_m").value(path_length_m);
+  j.key("mean_speed_mps").value(mean_speed_mps);
+  if (std::isnan(intent_fidelity))
+    j.key("intent_fidelity").null();
+  else
+    j.key("intent_fidelity").value(intent_fidelity);
+  j.key("final_goal_error_m").value(final_goal_error_m);
+  j.key("recoveries").value(static_cast<uint64_t>(recoveries));
+  j.key("legs_completed").value(static_cast<uint64_t>(legs_completed));
+  j.key("legs_failed").value(static_cast<uint64_t>(legs_failed));
+  j.key("legs_missed").value(static_cast<uint64_t>(legs_missed));
+  j.key("leg_miss_max_m").value(leg_miss_max_m);
+  j.key("recovery_cycles").value(static_cast<uint64_t>(recovery_cycles));
+  j.key("left_map").value(left_map);
+  j.key("cycles").value(static_cast<uint64_t>(cycles));
+  j.key("stops").value(static_cast<uint64_t>(stops));
+  j.key("slowed").value(static_cast<uint64_t>(slowed));
+  j.key("cycle_ms_mean").value(cycle_ms_mean);
+  j.key("cycle_ms_max").value(cycle_ms_max);
+  j.key("work_ms_p99").value(work_ms_p99);
+  j.key("work_ms_max").value(work_ms_max);
+  j.key("work_ms_p99_per_10min").beginArray();
+  for (double v : work_ms_p99_windows) j.value(v);
+  j.endArray();
+  j.key("rss_mb_per_minute").beginArray();
+  for (double v : rss_mb) j.value(v);
+  j.endArray();
+  j.key("depth_frames").value(static_cast<uint64_t>(depth_frames));
+  j.key("perception_ms_mean").value(perception_ms_mean);
+  j.key("wall_seconds").value(wall_seconds);
+  j.endObject();
+  return j.str();
 }
 
 }  // namespace carenav::navigation

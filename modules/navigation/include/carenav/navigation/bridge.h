@@ -23,9 +23,12 @@
 // The robot must stop by itself when no "cmd" arrives for a few cycles.
 #pragma once
 
+#include <carenav/common/robot.h>
 #include <carenav/navigation/intent.h>
 #include <carenav/navigation/local_planner.h>
 #include <carenav/navigation/scenario.h>
+
+#include <mrpt/obs/CObservation.h>
 
 #include <atomic>
 #include <functional>
@@ -65,6 +68,12 @@ std::string formatCommand(double t, const Twist& c);
  *  profile's beam count. Fewer ranges come back unchanged. */
 std::vector<float> reduceRanges(const std::vector<float>& ranges, size_t n,
                                 const std::function<bool(float)>& valid);
+
+/** A `scan` message as the observation of its sensor `s` (a lidar2d or a
+ *  range-array of the profile); `reduced`: it had more ranges than the
+ *  sensor's beams or segments (each kept bin holds its nearest return). */
+mrpt::obs::CObservation::Ptr bridgeObservation(const BridgeMessage& scan, const SensorParams& s,
+                                               bool& reduced);
 
 struct BridgeOptions {
   std::string address;            ///< HOST:PORT of the robot's bridge
