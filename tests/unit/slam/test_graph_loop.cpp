@@ -3,8 +3,8 @@
 // simulator's odometry noise): a loop closes when the robot comes back to its
 // start from another heading, and a run without any revisit is left as the
 // scan-matching front end made it.
+#include <carenav/io/evaluation.h>
 #include <carenav/io/trajectory.h>
-#include <carenav/slam/evaluation.h>
 #include <carenav/slam/slam_job.h>
 
 #include <gtest/gtest.h>
@@ -62,7 +62,7 @@ MapRun map(const std::string& rawlog, const std::string& method, const fs::path&
   r.result = slam::runSlam(o);
   const auto est = io::readTum((out / "trajectory.tum").string());
   const auto ref = io::readTum(rawlog.substr(0, rawlog.size() - 7) + ".gt.tum");
-  r.ate = slam::computeAte(slam::associate(est, ref)).translation.rmse;
+  r.ate = io::computeAte(io::associate(est, ref)).translation.rmse;
   return r;
 }
 }  // namespace
