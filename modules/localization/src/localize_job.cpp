@@ -1,9 +1,9 @@
 #include <carenav/common/json.h>
+#include <carenav/io/evaluation.h>
 #include <carenav/io/map_io.h>
 #include <carenav/io/map_render.h>
+#include <carenav/io/scan_stream.h>
 #include <carenav/localization/localize_job.h>
-#include <carenav/slam/evaluation.h>
-#include <carenav/slam/scan_stream.h>
 
 #include <unistd.h>
 #include <chrono>
@@ -85,7 +85,7 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
   const auto grid = io::loadGridMap(o.map, mo);
   io::Trajectory2D ref;
   if (!o.ref.empty()) ref = io::readTum(o.ref);
-  slam::ScanStream stream(o.rawlog, o.params.sensor);  // throws for missing/empty rawlogs
+  io::ScanStream stream(o.rawlog, o.params.sensor);  // throws for missing/empty rawlogs
 
   Localizer loc(grid, o.params);
   if (o.init)
@@ -100,7 +100,7 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
   LocalizeJobResult r;
   const auto t0 = std::chrono::steady_clock::now();
   const bool tty = o.progress && isatty(fileno(stderr));
-  slam::ScanStep s;
+  io::ScanStep s;
   std::optional<double> t_first;
   std::optional<double> t_prev;
   size_t repeats_before_convergence = 0;
@@ -166,8 +166,8 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
   ro.title =
       "carenav localize: estimate (red)" + std::string(ref.empty() ? "" : ", reference (blue)");
   if (!ref.empty()) {
-    const auto a = slam::associate(r.track, ref);
-    const auto ate = slam::computeAte(a, /*align=*/false);
+    const auto a = io::associate(r.track, ref);
+    const auto ate = io::computeAte(a, /*align=*/false);
     r.ate_rmse = ate.translation.rmse;
     r.ate_max = ate.translation.max;
     r.ate_pairs = a.size();

@@ -32,7 +32,7 @@ std::string spanText(const io::Trajectory2D& t) {
   return buf;
 }
 
-Json statsJson(const ErrorStats& s, bool full = true) {
+Json statsJson(const io::ErrorStats& s, bool full = true) {
   Json j = Json::object();
   j["n"] = s.n;
   if (full) j["rmse"] = s.rmse;
@@ -44,7 +44,7 @@ Json statsJson(const ErrorStats& s, bool full = true) {
   return j;
 }
 
-Json rpeJson(const RpeResult& r) {
+Json rpeJson(const io::RpeResult& r) {
   return {{"delta_m", r.distance},
           {"pairs", r.translation.n},
           {"translation_m", statsJson(r.translation)},
@@ -57,7 +57,7 @@ Json fileJson(const std::string& path, const io::Trajectory2D& t) {
   return {{"file", path}, {"poses", t.size()}, {"t_start", t.front().t}, {"t_end", t.back().t}};
 }
 
-Json associationJson(const EvalJobOptions& o, const std::optional<Association>& a) {
+Json associationJson(const EvalJobOptions& o, const std::optional<io::Association>& a) {
   Json j = Json::object();
   j["method"] = o.assoc.by_index ? "index" : o.assoc.interpolate ? "interpolate" : "nearest";
   j["max_dt_s"] = o.assoc.max_dt;
@@ -67,14 +67,14 @@ Json associationJson(const EvalJobOptions& o, const std::optional<Association>& 
   return j;
 }
 
-Json alignmentJson(const AteResult& ate) {
+Json alignmentJson(const io::AteResult& ate) {
   return {{"applied", ate.aligned},
           {"x_m", ate.alignment.x},
           {"y_m", ate.alignment.y},
           {"yaw_deg", ate.alignment.phi * kRad2Deg}};
 }
 
-Json relationsJson(const EvalJobOptions& o, const RelationsResult& r) {
+Json relationsJson(const EvalJobOptions& o, const io::RelationsResult& r) {
   return {{"file", o.relations.empty() ? o.make_relations : o.relations},
           {"total", r.total},
           {"used", r.used},
@@ -112,7 +112,7 @@ void writeOutputs(const EvalJobOptions& a, EvalJobResult& r) {
   // The whole estimate moved by the alignment, so the picture and the TUM file
   // show it where the ATE saw it.
   const mrpt::math::TPose2D T = r.ate ? r.ate->alignment : mrpt::math::TPose2D(0, 0, 0);
-  const io::Trajectory2D est_aligned = transformTrajectory(r.est, T);
+  const io::Trajectory2D est_aligned = io::transformTrajectory(r.est, T);
   std::vector<NamedTrajectory> tracks;
   // A wide light reference under a narrow estimate: both stay visible where
   // they overlap.
@@ -209,7 +209,7 @@ std::string EvalJobResult::toText(const EvalJobOptions& a) const {
     line("");
     line("ATE (absolute trajectory error)");
     line(std::string(19, ' ') + "      rmse      mean    median       std       max");
-    const auto row = [&](const char* name, const ErrorStats& s) {
+    const auto row = [&](const char* name, const io::ErrorStats& s) {
       line(std::string(name) + cell(s.rmse) + cell(s.mean) + cell(s.median) + cell(s.std) +
            cell(s.max));
     };
@@ -223,7 +223,7 @@ std::string EvalJobResult::toText(const EvalJobOptions& a) const {
     std::snprintf(head, sizeof head, "  %-8s%7s%16s%16s%11s%16s%13s", "delta", "pairs",
                   "trans rmse [m]", "trans mean [m]", "drift [%]", "rot mean [deg]", "rot [deg/m]");
     line(head);
-    const auto row = [&](const std::string& name, const RpeResult& x) {
+    const auto row = [&](const std::string& name, const io::RpeResult& x) {
       char buf[64];
       std::snprintf(buf, sizeof buf, "  %-8s%7zu", name.c_str(), x.translation.n);
       line(std::string(buf) + "      " + cell(x.translation.rmse) + "      " +
@@ -242,7 +242,7 @@ std::string EvalJobResult::toText(const EvalJobOptions& a) const {
     line("Relations metric (Kuemmerle et al. 2009): " + std::to_string(r.rel->used) + " of " +
          std::to_string(r.rel->total) + " relations used");
     line(std::string(22, ' ') + "      mean       std       max");
-    const auto row = [&](const char* name, const ErrorStats& s, const char* f) {
+    const auto row = [&](const char* name, const io::ErrorStats& s, const char* f) {
       line(std::string(name) + cell(s.mean, f) + cell(s.std, f) + cell(s.max, f));
     };
     // Squared errors are small; %g keeps their digits.
@@ -257,39 +257,39 @@ std::string EvalJobResult::toText(const EvalJobOptions& a) const {
 
 EvalJobResult runEvalJob(const EvalJobOptions& a) {
   EvalJobResult r;
-  std::vector<Relation> rels;
+  std::vector<io::Relation> rels;
   if (!a.ref.empty()) r.ref = readSorted(a.ref);
   if (!a.make_relations.empty()) {
-    rels = makeRelations(r.ref, a.rel_dist);
+    rels = io::makeRelations(r.ref, a.rel_dist);
     if (rels.empty())
       throw InputError(a.ref + ": no relations: the trajectory travels less than --rel-dist " +
                        std::to_string(a.rel_dist) + " m");
-    writeRelations(a.make_relations, rels);
+    io::writeRelations(a.make_relations, rels);
     if (a.progress)
       std::cerr << "carenav eval: wrote " << rels.size() << " relations (" << a.rel_dist
                 << " m apart) to " << a.make_relations << "\n";
     if (a.est.empty()) return r;
   }
   r.est = readSorted(a.est);
-  if (!a.relations.empty()) rels = readRelations(a.relations);
+  if (!a.relations.empty()) rels = io::readRelations(a.relations);
 
   // Stages that fail on bad input leave their error for the end, so what the
   // other stages computed is still reported and saved.
   if (!r.ref.empty()) {
     try {
-      r.assoc = associate(r.est, r.ref, a.assoc);
+      r.assoc = io::associate(r.est, r.ref, a.assoc);
     } catch (const InputError& e) {
       r.error = InputError(a.est + " vs " + a.ref + ": " + e.what());
     }
   }
   if (r.assoc) {
-    r.ate = computeAte(*r.assoc, a.align);
-    r.rpe_step = computeRpe(*r.assoc, 0);
-    for (double d : a.rpe_dist) r.rpe.push_back(computeRpe(*r.assoc, d));
+    r.ate = io::computeAte(*r.assoc, a.align);
+    r.rpe_step = io::computeRpe(*r.assoc, 0);
+    for (double d : a.rpe_dist) r.rpe.push_back(io::computeRpe(*r.assoc, d));
   }
   if (!rels.empty()) {
     try {
-      r.rel = computeRelationsError(r.est, rels, a.assoc);
+      r.rel = io::computeRelationsError(r.est, rels, a.assoc);
     } catch (const InputError& e) {
       const std::string rf = a.relations.empty() ? a.make_relations : a.relations;
       if (!r.error) r.error = InputError(a.est + " vs " + rf + ": " + e.what());

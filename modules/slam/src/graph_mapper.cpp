@@ -151,7 +151,7 @@ class GraphMapper : public Mapper {
     if (cfg.start_pose) pose_ = *cfg.start_pose;
   }
 
-  void process(const ScanStep& step) override {
+  void process(const io::ScanStep& step) override {
     ++stats_.scans;
     auto scan = clipScan(step.scan, cfg_.slam.scan_range_max);
     auto local = std::make_shared<CSimplePointsMap>();

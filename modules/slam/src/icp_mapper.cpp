@@ -73,7 +73,7 @@ class IcpMapper : public Mapper {
     builder_.initialize(initial);
   }
 
-  void process(const ScanStep& step) override {
+  void process(const io::ScanStep& step) override {
     // MRPT's pose extrapolator divides odometry increments by the time
     // between readings: a scan whose timestamp does not advance (logs stamped
     // in whole seconds, or not at all) gives it infinite velocities and the

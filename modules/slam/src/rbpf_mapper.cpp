@@ -75,7 +75,7 @@ class RbpfMapper : public Mapper {
     builder_.initialize(cfg.resume_map.value_or(mrpt::maps::CSimpleMap()), &x0);
   }
 
-  void process(const ScanStep& step) override {
+  void process(const io::ScanStep& step) override {
     const CPose2D guess =
         (cfg_.slam.use_odometry && step.odometry) ? *step.odometry : last_increment_;
     mrpt::obs::CActionCollection acts;

@@ -47,12 +47,12 @@ void writeSimpleMap(const mrpt::maps::CSimpleMap& sm, const std::string& path) {
 
 SlamJobResult runSlam(const SlamJobOptions& o) {
   SlamJobResult res;
-  ScanStream stream(o.rawlog, o.mapper.slam.sensor);  // InputError: missing/empty rawlog
+  io::ScanStream stream(o.rawlog, o.mapper.slam.sensor);  // InputError: missing/empty rawlog
   auto mapper = createMapper(o.method, o.mapper);
   Progress progress("slam " + o.method, stream.reader().fileSize());
   progress.setEnabled(o.progress && progress.enabled());
   const auto t0 = std::chrono::steady_clock::now();
-  ScanStep step;
+  io::ScanStep step;
   try {
     while (stream.next(step)) {
       mapper->process(step);

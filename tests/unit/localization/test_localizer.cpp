@@ -1,9 +1,9 @@
 // Localizer and LocalizationParams on MRPT's real localization_demo data.
 #include <carenav/common/profile.h>
 #include <carenav/io/map_io.h>
+#include <carenav/io/scan_stream.h>
 #include <carenav/localization/localize_job.h>
 #include <carenav/localization/localizer.h>
-#include <carenav/slam/scan_stream.h>
 
 #include <mrpt/bayes/CParticleFilter.h>
 #include <mrpt/obs/CActionCollection.h>
@@ -52,8 +52,8 @@ struct ReplayResult {
 };
 
 ReplayResult replay(Localizer& loc) {
-  slam::ScanStream stream(kRawlog, "");
-  slam::ScanStep s;
+  io::ScanStream stream(kRawlog, "");
+  io::ScanStep s;
   ReplayResult r;
   bool seen_converged = false;
   while (stream.next(s)) {
@@ -179,8 +179,8 @@ TEST(Localizer, LikelihoodTableGivesMrptsLikelihoodField) {
     io::COccupancyGridMap2D grid(loc.map());
     ASSERT_EQ(grid.likelihoodOptions.likelihoodMethod,
               io::COccupancyGridMap2D::lmLikelihoodField_Thrun);
-    slam::ScanStream stream(kRawlog, "");
-    slam::ScanStep s;
+    io::ScanStream stream(kRawlog, "");
+    io::ScanStep s;
     std::mt19937 gen(7);
     std::uniform_real_distribution<double> ux(grid.getXMin() - 1, grid.getXMax() + 1),
         uy(grid.getYMin() - 1, grid.getYMax() + 1), ua(-M_PI, M_PI);
@@ -235,8 +235,8 @@ TEST(Localizer, UpdatesDrawTheParticlesMrptsFilterDraws) {
   pfo.PF_algorithm = mrpt::bayes::CParticleFilter::pfStandardProposal;
   pfo.resamplingMethod = mrpt::bayes::CParticleFilter::prMultinomial;
 
-  slam::ScanStream stream(kRawlog, "");
-  slam::ScanStep s;
+  io::ScanStream stream(kRawlog, "");
+  io::ScanStep s;
   std::vector<std::pair<mrpt::poses::CPose2D, mrpt::obs::CObservation2DRangeScan::Ptr>> log;
   while (stream.next(s)) log.emplace_back(s.odometry.value_or(mrpt::poses::CPose2D()), s.scan);
   ASSERT_EQ(log.size(), 37u);

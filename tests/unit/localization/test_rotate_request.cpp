@@ -2,9 +2,9 @@
 // filter's state, on MRPT's real localization_demo data.
 #include <carenav/common/profile.h>
 #include <carenav/io/map_io.h>
+#include <carenav/io/scan_stream.h>
 #include <carenav/localization/localize_job.h>
 #include <carenav/localization/localizer.h>
-#include <carenav/slam/scan_stream.h>
 
 #include <gtest/gtest.h>
 
@@ -27,8 +27,8 @@ const io::COccupancyGridMap2D& demoMap() {
 }
 
 mrpt::obs::CObservation2DRangeScan::Ptr firstScan() {
-  slam::ScanStream stream(kRawlog, "");
-  slam::ScanStep s;
+  io::ScanStream stream(kRawlog, "");
+  io::ScanStep s;
   EXPECT_TRUE(stream.next(s));
   return s.scan;
 }
@@ -120,8 +120,8 @@ TEST(RotateRequest, EndsAfterTurningRotateTurnAndMayBeRaisedAgain) {
 TEST(RotateRequest, EndsWhenTheFilterConverges) {
   Localizer loc(demoMap(), rotateParams(2, 360));
   loc.initGlobal();
-  slam::ScanStream stream(kRawlog, "");
-  slam::ScanStep s;
+  io::ScanStream stream(kRawlog, "");
+  io::ScanStep s;
   bool seen_request = false;
   while (stream.next(s)) {
     const auto r = loc.step(s.odometry.value_or(mrpt::poses::CPose2D()), s.scan, s.time);
@@ -147,8 +147,8 @@ TEST(LocalizerState, TrackingThenLostOnAKidnappedStart) {
   loc.initPose(mrpt::poses::CPose2D(8.7, -10.1, mrpt::DEG2RAD(-40.0)), 0.1, 0.1,
                mrpt::DEG2RAD(3.0));
   EXPECT_EQ(loc.state(), Localizer::State::Tracking);
-  slam::ScanStream stream(kRawlog, "");
-  slam::ScanStep s;
+  io::ScanStream stream(kRawlog, "");
+  io::ScanStep s;
   bool seen_lost = false;
   while (stream.next(s)) {
     loc.step(s.odometry.value_or(mrpt::poses::CPose2D()), s.scan, s.time);

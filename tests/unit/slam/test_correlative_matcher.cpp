@@ -1,3 +1,4 @@
+#include <carenav/io/carmen.h>
 #include <carenav/io/rawlog_reader.h>
 #include <carenav/io/trajectory.h>
 #include <carenav/slam/correlative_matcher.h>
@@ -60,11 +61,14 @@ TEST(CorrelativeMatcher, MatchesConsecutiveScansOfTheIntelLog) {
       std::filesystem::temp_directory_path() / ("carenav_cm_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string rawlog = (dir / "intel.rawlog").string();
-  ASSERT_EQ(std::system(("'" + std::string(CARENAV_BINARY_DIR) +
-                         "/apps/carenav/carenav' -q import carmen '" + log +
-                         "' --odometry none --out '" + rawlog + "' >/dev/null")
-                            .c_str()),
-            0);
+  // What `carenav import carmen LOG --odometry none --out X.rawlog` does.
+  io::CarmenImportOptions import;
+  import.input = log;
+  import.output = rawlog;
+  import.odometry = io::CarmenOdometry::None;
+  const io::CarmenImportStats stats = io::importCarmen(import);
+  ASSERT_GT(stats.observations, 280u);
+  ASSERT_EQ(stats.tum, (dir / "intel.tum").string());
   const auto ref = io::readTum((dir / "intel.tum").string());
   std::vector<CSimplePointsMap> scans;
   io::RawlogReader r(rawlog);

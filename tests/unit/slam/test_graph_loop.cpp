@@ -1,15 +1,19 @@
-// icp-graph on simulated runs with exact ground truth (`carenav simulate`:
+// icp-graph on simulated runs with exact ground truth (the simulator of `carenav simulate`:
 // the INTERBOT's laser alone, driven on the real SENA map with the
 // simulator's odometry noise): a loop closes when the robot comes back to its
 // start from another heading, and a run without any revisit is left as the
 // scan-matching front end made it.
+#include <carenav/common/profile.h>
+#include <carenav/common/robot.h>
+#include <carenav/io/evaluation.h>
 #include <carenav/io/trajectory.h>
-#include <carenav/slam/evaluation.h>
+#include <carenav/sim/drive.h>
+#include <carenav/sim/simulate_job.h>
 #include <carenav/slam/slam_job.h>
 
 #include <gtest/gtest.h>
 
-#include <cstdlib>
+#include <algorithm>
 #include <filesystem>
 #include <string>
 
@@ -17,7 +21,6 @@ using namespace carenav;
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kBin = std::string(CARENAV_BINARY_DIR) + "/apps/carenav/carenav";
 const std::string kSrc = CARENAV_SOURCE_DIR;
 
 fs::path scratch(const std::string& name) {
@@ -27,21 +30,26 @@ fs::path scratch(const std::string& name) {
 }
 
 /** Simulates a drive along `path` (x,y waypoints) round the SENA building and
- *  returns the rawlog; the ground truth is next to it (.gt.tum). */
+ *  returns the rawlog; the ground truth is next to it (.gt.tum). What
+ *  `carenav simulate` does with the INTERBOT's profile without its Kinect
+ *  section, `--set sensor.laser.rate_hz=5 --seed 3 --start -8,4.5,0`. */
 std::string simulate(const fs::path& dir, const std::string& path) {
-  const std::string profile = (dir / "laser.ini").string();
-  const std::string rawlog = (dir / "run.rawlog").string();
-  const std::string show = "'" + kBin + "' profile show '" + kSrc +
-                           "/ini/interbot.ini' 2>/dev/null | awk '/^\\[/ { skip = ($0 == "
-                           "\"[sensor.kinect]\") } !skip' > '" +
-                           profile + "'";
-  EXPECT_EQ(std::system(show.c_str()), 0);
-  const std::string sim = "'" + kBin + "' -q simulate --profile '" + profile + "' --world '" +
-                          kSrc + "/maps/worlds/sena.yaml' --path '" + path +
-                          "' --start -8,4.5,0 --set sensor.laser.rate_hz=5 --seed 3 --out '" +
-                          rawlog + "' >/dev/null";
-  EXPECT_EQ(std::system(sim.c_str()), 0);
-  return rawlog;
+  Profile p = Profile::load(kSrc + "/ini/interbot.ini");
+  p.applyOverrides({"sensor.laser.rate_hz=5"});
+  sim::SimulateOptions o;
+  o.robot = p.section<RobotParams>("robot");
+  o.sensors = loadSensors(p);
+  o.sensors.erase(std::remove_if(o.sensors.begin(), o.sensors.end(),
+                                 [](const SensorParams& s) { return s.label == "kinect"; }),
+                  o.sensors.end());
+  o.params = p.section<sim::SimParams>("sim");
+  o.params.seed = 3;
+  o.world = kSrc + "/maps/worlds/sena.yaml";
+  o.path = sim::parsePath(path);
+  o.start = sim::parseStart("-8,4.5,0");
+  o.out = (dir / "run.rawlog").string();
+  o.progress = false;
+  return sim::runSimulate(o).rawlog;
 }
 
 struct MapRun {
@@ -62,7 +70,7 @@ MapRun map(const std::string& rawlog, const std::string& method, const fs::path&
   r.result = slam::runSlam(o);
   const auto est = io::readTum((out / "trajectory.tum").string());
   const auto ref = io::readTum(rawlog.substr(0, rawlog.size() - 7) + ".gt.tum");
-  r.ate = slam::computeAte(slam::associate(est, ref)).translation.rmse;
+  r.ate = io::computeAte(io::associate(est, ref)).translation.rmse;
   return r;
 }
 }  // namespace

@@ -2,7 +2,10 @@
 // the library core of `carenav localize` and of live navigation.
 #pragma once
 
+#include <carenav/localization/kld_sampling.h>
+#include <carenav/localization/likelihood_field.h>
 #include <carenav/localization/localization_params.h>
+#include <carenav/localization/rotate_request.h>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/math/CMatrixFixed.h>
@@ -20,6 +23,8 @@
 
 namespace carenav::localization {
 
+struct MotionSampler;
+
 /** A loss of localisation or a recovery from one. */
 struct LocalizationEvent {
   enum class Kind { Loss, Recovery };
@@ -27,17 +32,6 @@ struct LocalizationEvent {
   double t = 0;       ///< time of the scan that showed it
   double spread = 0;  ///< m, particle spread at that time
   const char* name() const { return kind == Kind::Loss ? "loss" : "recovery"; }
-};
-
-/** A "rotate in place to relocalise" request to the navigation layer
- *  (HOBBIT, [Puente14, App. Fig. 8]): raised when the filter has not converged for
- *  rotate_after_updates filter updates while the robot turned less than
- *  rotate_turn; it ends when the filter converges or once the robot has turned
- *  rotate_turn since the request. */
-struct RotateRequest {
-  double t_start = 0;           ///< time of the update that raised it
-  std::optional<double> t_end;  ///< time it ended (none: still open)
-  bool relocalised = false;     ///< it ended because the filter converged
 };
 
 /** What one step did. */
@@ -119,9 +113,9 @@ class Localizer {
    *  filter has not converged for rotate_after_updates updates and the robot
    *  had not turned rotate_turn meanwhile. Navigation should stop and turn in
    *  place until it goes false (converged, or rotate_turn turned). */
-  bool needsRotateInPlace() const { return rotate_open_; }
+  bool needsRotateInPlace() const { return rotate_.open(); }
   /** Every rotate-in-place request so far, the open one last. */
-  const std::vector<RotateRequest>& rotateRequests() const { return rotate_requests_; }
+  const std::vector<RotateRequest>& rotateRequests() const { return rotate_.requests(); }
   /** Time of the first update whose spread fell below converged_spread. */
   std::optional<double> convergenceTime() const { return convergence_time_; }
   const std::vector<LocalizationEvent>& events() const { return events_; }
@@ -136,18 +130,19 @@ class Localizer {
   void initUniform(const std::vector<size_t>& cells);
   void refreshEstimate();
   size_t inject(double fraction);
-  void updateRotateRequest(double turned_rad, double t);
   size_t globalCount() const;
   void resetTracking();
-  struct MotionSampler;
-  void drawKld(const MotionSampler& motion, size_t n_min);
-  void buildLikelihoodField();
+  // The steps of a filter update, in order.
+  MotionSampler odometryMotion() const;
+  void predict(const MotionSampler& motion, bool resample);
+  void weighScan(const mrpt::obs::CObservation2DRangeScan& scan);
+  double updateWeights(StepResult& r);
+  void updateAverages(double log_w_avg);
+  bool updateConvergence(double jump, double t);
+  void recover(bool lost_now, StepResult& r);
+  void filterUpdate(const mrpt::obs::CObservation2DRangeScan& scan, double t, StepResult& r);
   double effectiveSampleRatio() const;
   void normalizeWeights();
-  void scanPoints(const mrpt::obs::CObservation2DRangeScan& scan, std::vector<float>& xs,
-                  std::vector<float>& ys) const;
-  double fieldLogLikelihood(const std::vector<float>& xs, const std::vector<float>& ys, double x,
-                            double y, double phi) const;
 
   LocalizationParams p_;
   std::shared_ptr<mrpt::maps::COccupancyGridMap2D> map_;
@@ -166,30 +161,12 @@ class Localizer {
   size_t updates_ = 0, injections_ = 0;
   bool ever_converged_ = false;
   size_t global_n_ = 0;  // sample size of the last global start (0: none)
-  // rotate-in-place request
-  bool rotate_open_ = false;
-  size_t stall_updates_ = 0;  // consecutive updates without convergence
-  double stall_turn_ = 0;     // rad turned during them (or since the open request)
-  std::vector<RotateRequest> rotate_requests_;
+  RotateRequestTracker rotate_;
   double last_t_ = 0;  // time of the latest step
-  // likelihood field: log p of a point per cell (x + y * lf_sx_), and off the map
-  std::vector<double> lf_log_;
-  double lf_far_ = 0;
-  int lf_sx_ = 0, lf_sy_ = 0;
-  double lf_xmin_ = 0, lf_ymin_ = 0, lf_res_ = 1;
+  LikelihoodField field_;
+  KldSampler kld_;
   // scratch reused by every update
   std::vector<float> pts_x_, pts_y_;
-  std::vector<mrpt::math::TPose2D> drawn_;
-  std::vector<double> log_w_;
-  struct FastDraw {
-    static constexpr size_t kBins = 20;
-    std::vector<double> pdf;
-    size_t start[kBins] = {};
-    std::vector<double> counts[kBins];
-    void prepare(const std::vector<double>& log_w);
-    size_t draw(double u) const;
-  } fast_draw_;
-  std::vector<uint64_t> bins_;  // KLD bins (hash table)
   std::vector<double> prior_, ll_;
 };
 

@@ -1,17 +1,17 @@
-// 2.5D -> 2D: inverse sensor model ([Garrote17, Eqs. 3-6]; docs/design.md, 'Inverse sensor model')
-// and log-odds fusion into a robot-centred local occupancy grid; the height-band and 2D-scan
-// insertions of the baselines use the same grid.
+// Log-odds fusion into a robot-centred local occupancy grid ([Garrote17, Eq. 3]), and the
+// height-band and 2D-scan insertions of the baselines into it. The inverse sensor model that
+// fills it from the 2.5D grid is in ism.h.
 #pragma once
 
-#include <carenav/perception/elevation_grid.h>
-#include <carenav/perception/ground_plane.h>
+#include <carenav/perception/cloud.h>
 #include <carenav/perception/perception_params.h>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/poses/CPose2D.h>
 
-#include <cstdint>
+#include <cmath>
+#include <cstddef>
 #include <vector>
 
 namespace carenav::perception {
@@ -19,9 +19,6 @@ namespace carenav::perception {
 struct CellCounts {
   size_t occupied = 0, free = 0, unknown = 0;
 };
-
-/** What the ISM made of one elevation voxel (for tests and rendering). */
-enum class VoxelClass : uint8_t { None = 0, Ground, Obstacle };
 
 /** m x m log-odds grid, axis-aligned with the odometry frame and kept centred
  *  on the robot: moveTo() scrolls it by whole cells (cells leaving the window
@@ -79,42 +76,6 @@ class LocalOccupancy {
   mrpt::poses::CPose2D robot_;
   std::vector<float> logodds_, occ_, free_;
 };
-
-/** Noise-aware voxel classification (docs/perceive.md "Noise-aware voxel
- *  rules"), one class per elevation cell (None: no data):
- *  1. distance rule ([Garrote17]): d = max distance of z+ and z- to the plane; the
- *     threshold is max(d_pth, noise_k sigma_v), sigma_v the vertical depth
- *     noise at the voxel (depth_noise_std r^2 along the ray from
- *     `sensor_origin`, times the ray's vertical share |dz| / r);
- *  2. mean rule: |mean - plane| > mean_step + noise_k sigma_v / sqrt(N_z)
- *     (small boxes >= 20 mm, [Puente14, App. Sec. VI]);
- *  3. traversable surfaces: an off-plane voxel flat within the rule-1
- *     threshold around its own mean and connected (4-neighbours, breadth
- *     first from the plane's ground voxels) through mean steps of at most
- *     tan(max_slope_deg) d_r + noise_k sigma_diff is ground (ramps).
- *  `sensor_origin` null: no noise model (sigma_v = 0). */
-struct IsmStats {
-  size_t voxels = 0, obstacle_voxels = 0, ground_voxels = 0;
-  size_t rescued_voxels = 0;  ///< off-plane voxels kept as ground by rule 3
-};
-IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                        const Point3f* sensor_origin, std::vector<VoxelClass>& classes);
-
-/** Vertical noise sigma of a voxel at robot-frame (x, y, z) seen from `o`
- *  (0 without a noise model). */
-double verticalNoise(const PerceptionParams& p, const Point3f* o, double x, double y, double z);
-
-/** ISM integration of one elevation grid (robot frame) given the ground
- *  plane (robot frame), into `grid` at its current robot pose. `classes`
- *  (optional, one per elevation cell) receives each voxel's class. */
-IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                      LocalOccupancy& grid, std::vector<VoxelClass>* classes = nullptr,
-                      const Point3f* sensor_origin = nullptr);
-
-/** Voxel density, [Garrote17, Eq. 4], h floored at 1 mm (docs/design.md, 'Floored height'). */
-double voxelDensity(const ElevationCell& c, double cell_area, const PerceptionParams& p);
-/** Distance of a voxel to the plane: max over (x, y, z+) and (x, y, z-). */
-double voxelPlaneDistance(const ElevationCell& c, double x, double y, const Plane& pl);
 
 /** Height-band baseline ([Rosa17, Sec. 5.3], ROS pointcloud_to_laserscan +
  *  local_map): points with band_z_min < z < band_z_max are obstacles; per

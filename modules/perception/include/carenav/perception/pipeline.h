@@ -5,7 +5,7 @@
 #include <carenav/perception/cloud.h>
 #include <carenav/perception/elevation_grid.h>
 #include <carenav/perception/ground_plane.h>
-#include <carenav/perception/occupancy.h>
+#include <carenav/perception/ism.h>
 #include <carenav/perception/perception_params.h>
 #include <carenav/perception/virtual_scans.h>
 

@@ -4,7 +4,7 @@
 
 #include <carenav/common/errors.h>
 #include <carenav/common/json_fwd.h>
-#include <carenav/slam/evaluation.h>
+#include <carenav/io/evaluation.h>
 
 #include <optional>
 #include <string>
@@ -17,7 +17,7 @@ struct EvalJobOptions {
   std::string relations;       ///< relations file to evaluate against
   std::string make_relations;  ///< relations file to write from ref
   std::string out_dir;         ///< eval.json, trajectories.png, ate.png, estimate_aligned.tum
-  AssociationParams assoc;
+  io::AssociationParams assoc;
   bool align = true;                   ///< ATE after the SE(2) alignment
   std::vector<double> rpe_dist{1, 5};  ///< m, travelled distances of the RPE
   double rel_dist = 1;                 ///< m, between the poses of a made relation
@@ -27,11 +27,11 @@ struct EvalJobOptions {
 /** Everything computed; a stage that failed leaves its field empty. */
 struct EvalJobResult {
   io::Trajectory2D est, ref;
-  std::optional<Association> assoc;
-  std::optional<AteResult> ate;
-  std::optional<RpeResult> rpe_step;
-  std::vector<RpeResult> rpe;
-  std::optional<RelationsResult> rel;
+  std::optional<io::Association> assoc;
+  std::optional<io::AteResult> ate;
+  std::optional<io::RpeResult> rpe_step;
+  std::vector<io::RpeResult> rpe;
+  std::optional<io::RelationsResult> rel;
   std::vector<std::string> outputs;
   /** Bad input met by a stage (timestamps that do not overlap, relations
    *  outside the estimate): the other stages' results are still here; the

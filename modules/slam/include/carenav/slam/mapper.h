@@ -2,8 +2,8 @@
 // "icp-graph", "rbpf"), fed one scan at a time.
 #pragma once
 
+#include <carenav/io/scan_stream.h>
 #include <carenav/io/trajectory.h>
-#include <carenav/slam/scan_stream.h>
 #include <carenav/slam/slam_params.h>
 
 #include <mrpt/maps/CSimpleMap.h>
@@ -54,7 +54,7 @@ class Mapper {
  public:
   virtual ~Mapper() = default;
   /** Consumes one scan and the odometry since the previous one. */
-  virtual void process(const ScanStep& step) = 0;
+  virtual void process(const io::ScanStep& step) = 0;
   /** Ends the run (e.g. a final graph optimisation). */
   virtual void finish() {}
   /** Current pose estimate and its covariance (x, y, yaw). */

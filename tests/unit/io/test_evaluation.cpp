@@ -1,7 +1,7 @@
 // Trajectory evaluation: association, SE(2) alignment, ATE, RPE, relations.
 #include <carenav/common/errors.h>
+#include <carenav/io/evaluation.h>
 #include <carenav/io/trajectory.h>
-#include <carenav/slam/evaluation.h>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -13,7 +13,7 @@
 #include <random>
 
 using namespace carenav;
-using namespace carenav::slam;
+using namespace carenav::io;
 using io::TimedPose2D;
 using io::Trajectory2D;
 using mrpt::math::TPose2D;
@@ -388,7 +388,8 @@ TEST(Evaluation, MalformedTumFilesNameFileAndLine) {
       {"nan", "0 nan 2 0 0 0 0 1\n", ":1: "},
   };
   {  // Timestamps that step back (real logs have them) are sorted, and counted.
-    const std::string path = writeText("backwards.tum", "2 2 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n3 3 0 0 0 0 0 1\n");
+    const std::string path =
+        writeText("backwards.tum", "2 2 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n3 3 0 0 0 0 0 1\n");
     size_t reordered = 0;
     const auto t = io::readTum(path, &reordered);
     EXPECT_EQ(reordered, 1u);

@@ -10,7 +10,7 @@
 #include <optional>
 #include <string>
 
-namespace carenav::slam {
+namespace carenav::io {
 
 /** One scan and the robot motion since the previous scan. */
 struct ScanStep {
@@ -31,17 +31,17 @@ class ScanStream {
   /** `sensor_label` "" takes the first 2D scan of each entry. */
   ScanStream(const std::string& rawlog, std::string sensor_label);
 
-  /** False at the end of the log. Throws io::RawlogError when the log is
+  /** False at the end of the log. Throws RawlogError when the log is
    *  broken (the steps handed out before stay valid). */
   bool next(ScanStep& step);
 
-  const io::RawlogReader& reader() const { return reader_; }
+  const RawlogReader& reader() const { return reader_; }
   size_t entriesWithoutScan() const { return entries_without_scan_; }
   /** Labels of the 2D scans seen but not used (another sensor). */
   const std::vector<std::string>& otherLabels() const { return other_labels_; }
 
  private:
-  io::RawlogReader reader_;
+  RawlogReader reader_;
   std::string label_;
   size_t count_ = 0;
   size_t entries_without_scan_ = 0;
@@ -50,4 +50,4 @@ class ScanStream {
   std::vector<std::string> other_labels_;
 };
 
-}  // namespace carenav::slam
+}  // namespace carenav::io

@@ -1,6 +1,6 @@
 #include <carenav/common/errors.h>
+#include <carenav/io/evaluation.h>
 #include <carenav/io/number_table.h>
-#include <carenav/slam/evaluation.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,10 +11,8 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace carenav::slam {
+namespace carenav::io {
 
-using io::TimedPose2D;
-using io::Trajectory2D;
 using mrpt::math::TPose2D;
 
 namespace {
@@ -306,7 +304,7 @@ RpeResult computeRpe(const Association& a, double distance) {
 
 std::vector<Relation> readRelations(const std::string& path) {
   std::vector<Relation> out;
-  io::readNumberRows(path, 8, "t1 t2 x y z roll pitch yaw", [&](const double* v, int lineno) {
+  readNumberRows(path, 8, "t1 t2 x y z roll pitch yaw", [&](const double* v, int lineno) {
     Relation r;
     r.t1 = v[0];
     r.t2 = v[1];
@@ -392,4 +390,4 @@ RelationsResult computeRelationsError(const Trajectory2D& est, const std::vector
   return r;
 }
 
-}  // namespace carenav::slam
+}  // namespace carenav::io

@@ -1,6 +1,6 @@
 // Trajectory accuracy: association by timestamp, SE(2) alignment, absolute
 // trajectory error (ATE), relative pose error (RPE) and the relations metric of
-// Kümmerle et al. 2009. Pure functions on io::Trajectory2D; docs/eval.md has
+// Kümmerle et al. 2009. Pure functions on Trajectory2D; docs/eval.md has
 // the formulas.
 #pragma once
 
@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace carenav::slam {
+namespace carenav::io {
 
 /** How estimated poses are paired with reference poses.
  *  Default (nearest): an estimated pose and a reference pose match when each
@@ -37,7 +37,7 @@ struct AssociationParams {
 
 /** Matched pairs: est[k] and ref[k] describe the same instant (est's time). */
 struct Association {
-  io::Trajectory2D est, ref;
+  Trajectory2D est, ref;
   std::vector<size_t> est_index;  ///< index of each pair in the input estimate
   size_t est_total = 0, ref_total = 0;
   size_t interpolated = 0;  ///< pairs whose reference pose was interpolated
@@ -47,13 +47,13 @@ struct Association {
 /** Pairs the poses of two trajectories by time. Throws InputError when fewer
  *  than 2 pairs match, saying the timestamps do not overlap and giving both
  *  time ranges; both trajectories must be sorted by time (readTum checks it). */
-Association associate(const io::Trajectory2D& est, const io::Trajectory2D& ref,
+Association associate(const Trajectory2D& est, const Trajectory2D& ref,
                       const AssociationParams& p = {});
 
 /** The pose of `traj` at time t under the same rules as associate() (nearest
  *  within max_dt, or interpolated), or nothing when there is none. */
-std::optional<io::TimedPose2D> poseAt(const io::Trajectory2D& traj, double t,
-                                      const AssociationParams& p = {});
+std::optional<TimedPose2D> poseAt(const Trajectory2D& traj, double t,
+                                  const AssociationParams& p = {});
 
 /** Summary of a set of non-negative errors. All fields are NaN when n == 0
  *  (JSON null). std is the population standard deviation. */
@@ -69,10 +69,10 @@ struct ErrorStats {
  *  then the rotation from the 2x2 cross-covariance in closed form.
  *  Needs est.size() == ref.size(); with fewer than 2 pairs or coincident
  *  positions the rotation is undetermined and 0 is returned for it. */
-mrpt::math::TPose2D alignSE2(const io::Trajectory2D& est, const io::Trajectory2D& ref);
+mrpt::math::TPose2D alignSE2(const Trajectory2D& est, const Trajectory2D& ref);
 
 /** T ⊕ p for every pose (positions rotated and shifted, yaw + T.phi). */
-io::Trajectory2D transformTrajectory(const io::Trajectory2D& traj, const mrpt::math::TPose2D& T);
+Trajectory2D transformTrajectory(const Trajectory2D& traj, const mrpt::math::TPose2D& T);
 
 /** Absolute trajectory error (Sturm et al. 2012) of an association. */
 struct AteResult {
@@ -82,7 +82,7 @@ struct AteResult {
   ErrorStats rotation;               ///< deg, |yaw_ref - yaw_est - T.phi| wrapped to [0, 180]
   std::vector<double> trans_errors;  ///< m, per pair
   std::vector<double> rot_errors;    ///< deg, per pair
-  io::Trajectory2D est_aligned;      ///< the estimate's matched poses after T
+  Trajectory2D est_aligned;          ///< the estimate's matched poses after T
 };
 AteResult computeAte(const Association& a, bool align = true);
 
@@ -121,7 +121,7 @@ void writeRelations(const std::string& path, const std::vector<Relation>& rels);
 
 /** Relations from a reference trajectory: from every pose i to the first pose
  *  j where the path length from i reaches `distance` (m). */
-std::vector<Relation> makeRelations(const io::Trajectory2D& ref, double distance);
+std::vector<Relation> makeRelations(const Trajectory2D& ref, double distance);
 
 /** The metric of Kümmerle et al. 2009 ("On measuring the accuracy of SLAM
  *  algorithms", Autonomous Robots 27(4)): for each relation whose two times
@@ -136,11 +136,10 @@ struct RelationsResult {
   ErrorStats rotation_sq;      ///< deg²
 };
 /** Throws InputError when no relation has both poses in the estimate. */
-RelationsResult computeRelationsError(const io::Trajectory2D& est,
-                                      const std::vector<Relation>& rels,
+RelationsResult computeRelationsError(const Trajectory2D& est, const std::vector<Relation>& rels,
                                       const AssociationParams& p = {});
 
 /** Angle wrapped to (-pi, pi]. */
 double wrapAngle(double a);
 
-}  // namespace carenav::slam
+}  // namespace carenav::io

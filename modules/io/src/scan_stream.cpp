@@ -1,14 +1,14 @@
-#include <carenav/slam/scan_stream.h>
+#include <carenav/io/scan_stream.h>
 
 #include <algorithm>
 
-namespace carenav::slam {
+namespace carenav::io {
 
 ScanStream::ScanStream(const std::string& rawlog, std::string sensor_label)
     : reader_(rawlog), label_(std::move(sensor_label)) {}
 
 bool ScanStream::next(ScanStep& step) {
-  io::RawlogEntry e;
+  RawlogEntry e;
   while (reader_.next(e)) {
     if (e.odometry_increment) seen_odometry_ = true;
     if (e.odometry_increment)
@@ -29,7 +29,7 @@ bool ScanStream::next(ScanStep& step) {
         other_labels_.push_back(s->sensorLabel);
     }
     if (!scan) {
-      if (e.kind != io::EntryKind::Actions && !had_obs) ++entries_without_scan_;
+      if (e.kind != EntryKind::Actions && !had_obs) ++entries_without_scan_;
       continue;
     }
     step = ScanStep{};
@@ -52,4 +52,4 @@ bool ScanStream::next(ScanStep& step) {
   return false;
 }
 
-}  // namespace carenav::slam
+}  // namespace carenav::io
