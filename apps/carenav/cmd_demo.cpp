@@ -4,7 +4,7 @@
 #include <carenav/common/errors.h>
 #include <carenav/io/map_io.h>
 #include <carenav/io/rawlog_info.h>
-#include <carenav/navigation/scenario.h>
+#include <carenav/runtime/scenario.h>
 #include <carenav/places/places.h>
 #include <carenav/slam/slam_job.h>
 

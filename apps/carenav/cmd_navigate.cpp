@@ -6,10 +6,10 @@
 //                  --start x,y,deg   (a real robot)
 #include <carenav/common/errors.h>
 #include <carenav/common/profile.h>
-#include <carenav/navigation/bridge.h>
-#include <carenav/navigation/intent.h>
+#include <carenav/runtime/bridge.h>
+#include <carenav/runtime/intent.h>
 #include <carenav/navigation/local_planner.h>
-#include <carenav/navigation/suite.h>
+#include <carenav/runtime/suite.h>
 
 #include <atomic>
 #include <csignal>

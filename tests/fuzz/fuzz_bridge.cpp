@@ -1,6 +1,6 @@
 // Fuzzes the TCP bridge's line protocol (carenav::navigation::parseBridgeLine):
 // every line of the input is parsed as the robot would send it.
-#include "carenav/navigation/bridge.h"
+#include "carenav/runtime/bridge.h"
 #include "fuzz_common.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,5 +1,5 @@
 // Fuzzes the navigation scenario reader (carenav::navigation::parseScenario).
-#include "carenav/navigation/scenario.h"
+#include "carenav/runtime/scenario.h"
 #include "fuzz_common.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,7 +1,7 @@
 // `carenav navigate --bridge`: the test plays a robot on the other end of the
 // line-based TCP bridge (docs/navigate.md): a differential base in front of a
 // wall, its user pushing towards it, and checks the commands carenav sends.
-#include <carenav/navigation/line_socket.h>
+#include <carenav/runtime/line_socket.h>
 
 #include <chrono>
 #include <cmath>

@@ -1,5 +1,5 @@
 // Line-based TCP (see line_socket.h).
-#include <carenav/navigation/line_socket.h>
+#include <carenav/runtime/line_socket.h>
 
 #include <arpa/inet.h>
 #include <fcntl.h>

@@ -3,7 +3,7 @@
 #include <carenav/common/json.h>
 #include <carenav/localization/localization_params.h>
 #include <carenav/navigation/navigation_params.h>
-#include <carenav/navigation/suite.h>
+#include <carenav/runtime/suite.h>
 #include <carenav/perception/perception_params.h>
 #include <carenav/sim/sim_params.h>
 #include <carenav/slam/slam_params.h>

@@ -3,7 +3,7 @@
 // end its picture and summary.
 #include <carenav/common/text.h>
 #include <carenav/io/map_io.h>
-#include <carenav/navigation/session.h>
+#include <carenav/runtime/session.h>
 
 #include <unistd.h>
 #include <cmath>

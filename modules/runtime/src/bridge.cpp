@@ -1,7 +1,7 @@
 // The robot bridge (see bridge.h and docs/navigate.md).
 #include <carenav/common/errors.h>
-#include <carenav/navigation/bridge.h>
-#include <carenav/navigation/line_socket.h>
+#include <carenav/runtime/bridge.h>
+#include <carenav/runtime/line_socket.h>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservationRange.h>

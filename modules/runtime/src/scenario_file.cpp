@@ -1,7 +1,7 @@
 // Reading scenario files (docs/navigate.md).
 #include <carenav/common/errors.h>
 #include <carenav/common/yaml.h>
-#include <carenav/navigation/scenario.h>
+#include <carenav/runtime/scenario.h>
 
 #include <mrpt/core/bits_math.h>
 

@@ -3,7 +3,7 @@
 #include <carenav/common/errors.h>
 #include <carenav/localization/localization_params.h>
 #include <carenav/navigation/navigation_params.h>
-#include <carenav/navigation/scenario.h>
+#include <carenav/runtime/scenario.h>
 #include <carenav/perception/perception_params.h>
 #include <carenav/sim/sim_params.h>
 #include <carenav/slam/slam_params.h>

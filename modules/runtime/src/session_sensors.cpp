@@ -3,7 +3,7 @@
 // the perception pipeline (2.5D grid, RRT-GPD ground plane, inverse sensor
 // model: stairs down and gutters become obstacles).
 #include <carenav/localization/localizer.h>
-#include <carenav/navigation/session.h>
+#include <carenav/runtime/session.h>
 #include <carenav/perception/pipeline.h>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>

@@ -2,7 +2,7 @@
 #include <carenav/common/errors.h>
 #include <carenav/localization/localizer.h>
 #include <carenav/navigation/mrpt_ptg.h>
-#include <carenav/navigation/session.h>
+#include <carenav/runtime/session.h>
 #include <carenav/perception/pipeline.h>
 
 #include <unistd.h>

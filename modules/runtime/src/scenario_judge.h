@@ -4,8 +4,8 @@
 #pragma once
 
 #include <carenav/navigation/local_map.h>
-#include <carenav/navigation/scenario.h>
-#include <carenav/navigation/session.h>
+#include <carenav/runtime/scenario.h>
+#include <carenav/runtime/session.h>
 #include <carenav/sim/simulator.h>
 
 #include <string>

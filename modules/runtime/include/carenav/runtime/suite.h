@@ -2,7 +2,7 @@
 // several plugins, each run in a fresh child process.
 #pragma once
 
-#include <carenav/navigation/scenario.h>
+#include <carenav/runtime/scenario.h>
 
 #include <string>
 #include <vector>

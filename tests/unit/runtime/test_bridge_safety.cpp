@@ -1,9 +1,9 @@
 // The bridge's input side: half-closed and reset connections, bounded reads,
 // peer text made printable, implausible numbers refused, huge scans reduced.
 #include <carenav/common/robot.h>
-#include <carenav/navigation/bridge.h>
-#include <carenav/navigation/intent.h>
-#include <carenav/navigation/line_socket.h>
+#include <carenav/runtime/bridge.h>
+#include <carenav/runtime/intent.h>
+#include <carenav/runtime/line_socket.h>
 
 #include <gtest/gtest.h>
 

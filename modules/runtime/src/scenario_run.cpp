@@ -5,7 +5,7 @@
 
 #include <carenav/common/errors.h>
 #include <carenav/common/text.h>
-#include <carenav/navigation/session.h>
+#include <carenav/runtime/session.h>
 #include <carenav/places/places.h>
 #include <carenav/sim/simulator.h>
 

@@ -1,9 +1,9 @@
 // The live app's inputs: intent scripts, the keyboard/joystick/TCP sources
 // and the robot bridge's message parser.
 #include <carenav/common/errors.h>
-#include <carenav/navigation/bridge.h>
-#include <carenav/navigation/intent.h>
-#include <carenav/navigation/line_socket.h>
+#include <carenav/runtime/bridge.h>
+#include <carenav/runtime/intent.h>
+#include <carenav/runtime/line_socket.h>
 
 #include <fcntl.h>
 #include <gtest/gtest.h>

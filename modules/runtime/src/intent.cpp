@@ -1,7 +1,7 @@
 // User intent sources for the live app (see intent.h).
 #include <carenav/common/errors.h>
-#include <carenav/navigation/intent.h>
-#include <carenav/navigation/line_socket.h>
+#include <carenav/runtime/intent.h>
+#include <carenav/runtime/line_socket.h>
 
 #include <fcntl.h>
 #include <linux/joystick.h>

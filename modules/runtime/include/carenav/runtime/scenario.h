@@ -5,7 +5,7 @@
 #include <carenav/common/errors.h>
 #include <carenav/common/json_fwd.h>
 #include <carenav/common/robot.h>
-#include <carenav/navigation/intent.h>
+#include <carenav/runtime/intent.h>
 #include <carenav/navigation/navigation_params.h>
 
 #include <mrpt/math/TPoint2D.h>

@@ -3,9 +3,9 @@
 #include <carenav/common/errors.h>
 #include <carenav/common/text.h>
 #include <carenav/io/map_io.h>
-#include <carenav/navigation/bridge.h>
-#include <carenav/navigation/line_socket.h>
-#include <carenav/navigation/session.h>
+#include <carenav/runtime/bridge.h>
+#include <carenav/runtime/line_socket.h>
+#include <carenav/runtime/session.h>
 #include <carenav/places/places.h>
 
 #include <chrono>

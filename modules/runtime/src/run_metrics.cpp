@@ -1,7 +1,7 @@
 // RunMetrics as JSON: the summary of a run, and the whole record passed from
 // a suite's child process to its parent.
 #include <carenav/common/json.h>
-#include <carenav/navigation/scenario.h>
+#include <carenav/runtime/scenario.h>
 
 #include <cmath>
 #include <filesystem>

@@ -12,9 +12,9 @@
 #include <carenav/common/run_health.h>
 #include <carenav/io/map_render.h>
 #include <carenav/navigation/global_planner.h>
-#include <carenav/navigation/intent.h>
+#include <carenav/runtime/intent.h>
 #include <carenav/navigation/navigator.h>
-#include <carenav/navigation/scenario.h>
+#include <carenav/runtime/scenario.h>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/obs/CObservation.h>

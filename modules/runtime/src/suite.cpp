@@ -1,7 +1,7 @@
 #include <carenav/common/data_dir.h>
 #include <carenav/common/errors.h>
 #include <carenav/common/json.h>
-#include <carenav/navigation/suite.h>
+#include <carenav/runtime/suite.h>
 
 #include <sys/wait.h>
 #include <unistd.h>

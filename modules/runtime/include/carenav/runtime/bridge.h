@@ -24,9 +24,9 @@
 #pragma once
 
 #include <carenav/common/robot.h>
-#include <carenav/navigation/intent.h>
+#include <carenav/runtime/intent.h>
 #include <carenav/navigation/local_planner.h>
-#include <carenav/navigation/scenario.h>
+#include <carenav/runtime/scenario.h>
 
 #include <mrpt/obs/CObservation.h>
 
