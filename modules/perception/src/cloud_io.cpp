@@ -505,12 +505,31 @@ Cloud readPcd(const std::string& path) {
   return c;
 }
 
-Cloud readPly(const std::string& path) {
-  const std::string data = slurpFile(path);
+namespace {
+
+struct PlyProp {
+  std::string name, type;
+  int size;
+};
+
+/** A PLY header as read: the vertex element's properties and where the body starts. */
+struct PlyHeader {
+  std::string format;
+  long nvert = -1;
+  bool in_vertex = false, vertex_seen = false, ended = false, other_elements = false;
+  std::vector<PlyProp> props;
+  int idx[3] = {-1, -1, -1};  ///< properties x, y and z
+};
+
+/** Header lines of a PLY file, numbered for messages. */
+struct PlyLines {
+  const std::string& path;
+  const std::string& data;
   size_t pos = 0;
   int line_no = 0;
-  // Next header line (without '\n' / '\r'); false at the end of the data.
-  auto nextLine = [&](std::string& line) {
+
+  /** Next header line (without '\n' / '\r'); false at the end of the data. */
+  bool next(std::string& line) {
     if (pos >= data.size()) return false;
     size_t eol = data.find('\n', pos);
     if (eol == std::string::npos) eol = data.size();
@@ -526,19 +545,9 @@ Cloud readPly(const std::string& path) {
       throw InputError(path + ": not a PLY file: header line " + std::to_string(line_no) +
                        " holds binary bytes ('" + printable(line, 24) + "')");
     return true;
-  };
-  std::string line;
-  if (!nextLine(line) || tokens(line) != std::vector<std::string>{"ply"})
-    throw InputError(path + ": not a PLY file (first line is not 'ply')");
-  std::string format;
-  long nvert = -1;
-  bool in_vertex = false, vertex_seen = false, ended = false, other_elements = false;
-  struct Prop {
-    std::string name, type;
-    int size;
-  };
-  std::vector<Prop> props;
-  auto typeSize = [&](const std::string& t) -> int {
+  }
+
+  int typeSize(const std::string& t) const {
     if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
     if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
     if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" ||
@@ -547,121 +556,161 @@ Cloud readPly(const std::string& path) {
     if (t == "double" || t == "float64") return 8;
     throw InputError(path + ": PLY header line " + std::to_string(line_no) +
                      ": unknown property type '" + printable(t) + "'");
-  };
-  while (nextLine(line)) {
-    auto t = tokens(line);
-    if (t.empty() || t[0] == "comment" || t[0] == "obj_info") continue;
-    const std::string where = "PLY header line " + std::to_string(line_no);
-    if (t[0] == "format" && t.size() == 3) {
-      format = t[1];
-    } else if (t[0] == "element" && t.size() == 3) {
-      if (t[1] == "vertex") {
-        if (vertex_seen) throw InputError(path + ": " + where + ": a second vertex element");
-        nvert = toLong(path, where, t[2]);
-        in_vertex = vertex_seen = true;
-      } else {
-        if (!vertex_seen)
-          throw InputError(path + ": " + where + ": element '" + printable(t[1]) +
-                           "' before the vertex element is not supported");
-        in_vertex = false;
-        other_elements = true;
-      }
-    } else if (t[0] == "property" && t.size() >= 3) {
-      if (in_vertex) {
-        if (t[1] == "list")
-          throw InputError(path + ": " + where + ": list property in the vertex element");
-        props.push_back({t[2], t[1], typeSize(t[1])});
-      }
-    } else if (t[0] == "end_header") {
-      ended = true;
-      break;
-    } else {
-      throw InputError(path + ": malformed " + where + ": '" + printable(line) + "'");
-    }
   }
-  if (!ended) throw InputError(path + ": PLY header has no end_header line");
-  if (!vertex_seen) throw InputError(path + ": PLY header has no vertex element");
+};
+
+void readPlyElement(const std::string& path, const std::string& where,
+                    const std::vector<std::string>& t, PlyHeader& h) {
+  if (t[1] == "vertex") {
+    if (h.vertex_seen) throw InputError(path + ": " + where + ": a second vertex element");
+    h.nvert = toLong(path, where, t[2]);
+    h.in_vertex = h.vertex_seen = true;
+  } else {
+    if (!h.vertex_seen)
+      throw InputError(path + ": " + where + ": element '" + printable(t[1]) +
+                       "' before the vertex element is not supported");
+    h.in_vertex = false;
+    h.other_elements = true;
+  }
+}
+
+/** One header line into `h`; false after end_header. */
+bool readPlyHeaderLine(const PlyLines& in, const std::string& line, PlyHeader& h) {
+  const std::string& path = in.path;
+  auto t = tokens(line);
+  if (t.empty() || t[0] == "comment" || t[0] == "obj_info") return true;
+  const std::string where = "PLY header line " + std::to_string(in.line_no);
+  if (t[0] == "format" && t.size() == 3) {
+    h.format = t[1];
+  } else if (t[0] == "element" && t.size() == 3) {
+    readPlyElement(path, where, t, h);
+  } else if (t[0] == "property" && t.size() >= 3) {
+    if (h.in_vertex) {
+      if (t[1] == "list")
+        throw InputError(path + ": " + where + ": list property in the vertex element");
+      h.props.push_back({t[2], t[1], in.typeSize(t[1])});
+    }
+  } else if (t[0] == "end_header") {
+    h.ended = true;
+    return false;
+  } else {
+    throw InputError(path + ": malformed " + where + ": '" + printable(line) + "'");
+  }
+  return true;
+}
+
+/** The header up to end_header, checked; `in.pos` is then where the body starts. */
+PlyHeader readPlyHeader(PlyLines& in) {
+  const std::string& path = in.path;
+  std::string line;
+  if (!in.next(line) || tokens(line) != std::vector<std::string>{"ply"})
+    throw InputError(path + ": not a PLY file (first line is not 'ply')");
+  PlyHeader h;
+  while (in.next(line))
+    if (!readPlyHeaderLine(in, line, h)) break;
+  if (!h.ended) throw InputError(path + ": PLY header has no end_header line");
+  if (!h.vertex_seen) throw InputError(path + ": PLY header has no vertex element");
   int ix = -1, iy = -1, iz = -1;
-  for (size_t i = 0; i < props.size(); ++i) {
-    if (props[i].name == "x") ix = static_cast<int>(i);
-    if (props[i].name == "y") iy = static_cast<int>(i);
-    if (props[i].name == "z") iz = static_cast<int>(i);
+  for (size_t i = 0; i < h.props.size(); ++i) {
+    if (h.props[i].name == "x") ix = static_cast<int>(i);
+    if (h.props[i].name == "y") iy = static_cast<int>(i);
+    if (h.props[i].name == "z") iz = static_cast<int>(i);
   }
   if (ix < 0 || iy < 0 || iz < 0)
     throw InputError(path + ": PLY vertex element has no x, y and z properties");
-  const size_t n = static_cast<size_t>(nvert);
-  const size_t body = pos;  // <= data.size(), also when end_header has no newline
-  const size_t left = data.size() - body;
-  Cloud c;
-  c.width = n;
-  c.height = 1;
-  const int idx[3] = {ix, iy, iz};
-  if (format == "ascii") {
-    checkDeclaredPoints(path, "PLY header (ascii vertex element)", n, left, 2 * props.size());
-    c.points.resize(n);
-    std::istringstream hs(data.substr(body));
-    size_t k = 0;
-    while (k < n && std::getline(hs, line)) {
-      auto t = tokens(line);
-      if (t.empty()) continue;
-      if (t.size() < props.size())
-        throw InputError(path + ": PLY vertex " + std::to_string(k) + " has " +
-                         std::to_string(t.size()) + " values, the header says " +
-                         std::to_string(props.size()));
-      float v[3];
-      for (int a = 0; a < 3; ++a) {
-        const std::string& s = t[idx[a]];
-        v[a] = (s == "nan" || s == "NaN" || s == "-nan")
-                   ? kNaN
-                   : static_cast<float>(toDouble(path, "vertex " + std::to_string(k), s));
-      }
-      c.points[k++] = {v[0], v[1], v[2]};
-    }
-    if (k < n)
-      throw InputError(path + ": PLY truncated: " + std::to_string(k) + " of " + std::to_string(n) +
-                       " vertices");
-    if (!other_elements)  // nothing may follow the vertices
-      while (std::getline(hs, line))
-        if (!tokens(line).empty())
-          throw InputError(path + ": PLY has more vertex lines than 'element vertex " +
-                           std::to_string(n) + "'");
-  } else if (format == "binary_little_endian") {
-    std::vector<size_t> off(props.size());
-    size_t rec = 0;
-    for (size_t i = 0; i < props.size(); ++i) {
-      off[i] = rec;
-      rec += props[i].size;
-    }
-    const auto need = mulSize(n, rec);
-    if (!need || left < *need)
-      throw InputError(path + ": PLY binary data truncated: " + std::to_string(left) +
-                       " bytes of " + (need ? std::to_string(*need) : std::string("(overflow)")) +
-                       " for " + std::to_string(n) + " vertices");
-    if (!other_elements && left - *need >= rec)
-      throw InputError(path + ": PLY has " + std::to_string(left - *need) + " bytes after its " +
-                       std::to_string(n) +
-                       " vertices (more vertices than 'element vertex' declares?)");
-    checkDeclaredPoints(path, "PLY header (binary vertex element)", n, left, rec);
-    c.points.resize(n);
-    const char* b = data.data() + body;
-    for (size_t k = 0; k < n; ++k) {
-      float v[3];
-      for (int a = 0; a < 3; ++a) {
-        const Prop& p = props[idx[a]];
-        const char kind =
-            (p.type == "float" || p.type == "double" || p.type == "float32" || p.type == "float64")
-                ? 'F'
-                : (p.type[0] == 'u' ? 'U' : 'I');
-        v[a] = static_cast<float>(readScalar(b + k * rec + off[idx[a]], kind, p.size));
-      }
-      c.points[k] = {v[0], v[1], v[2]};
-    }
-  } else if (format.empty()) {
-    throw InputError(path + ": PLY header has no format line");
-  } else {
-    throw InputError(path + ": PLY format '" + printable(format) +
-                     "' is not supported (ascii or binary_little_endian)");
+  h.idx[0] = ix;
+  h.idx[1] = iy;
+  h.idx[2] = iz;
+  return h;
+}
+
+void readPlyAscii(const std::string& path, const std::string& data, size_t body, const PlyHeader& h,
+                  Cloud& c) {
+  const size_t n = c.width;
+  checkDeclaredPoints(path, "PLY header (ascii vertex element)", n, data.size() - body,
+                      2 * h.props.size());
+  c.points.resize(n);
+  std::istringstream hs(data.substr(body));
+  std::string line;
+  size_t k = 0;
+  while (k < n && std::getline(hs, line)) {
+    auto t = tokens(line);
+    if (t.empty()) continue;
+    if (t.size() < h.props.size())
+      throw InputError(path + ": PLY vertex " + std::to_string(k) + " has " +
+                       std::to_string(t.size()) + " values, the header says " +
+                       std::to_string(h.props.size()));
+    float v[3];
+    for (int a = 0; a < 3; ++a)
+      v[a] = asciiCoordinate(path, "vertex " + std::to_string(k), t[h.idx[a]]);
+    c.points[k++] = {v[0], v[1], v[2]};
   }
+  if (k < n)
+    throw InputError(path + ": PLY truncated: " + std::to_string(k) + " of " + std::to_string(n) +
+                     " vertices");
+  if (!h.other_elements)  // nothing may follow the vertices
+    while (std::getline(hs, line))
+      if (!tokens(line).empty())
+        throw InputError(path + ": PLY has more vertex lines than 'element vertex " +
+                         std::to_string(n) + "'");
+}
+
+char plyKind(const std::string& type) {
+  return (type == "float" || type == "double" || type == "float32" || type == "float64")
+             ? 'F'
+             : (type[0] == 'u' ? 'U' : 'I');
+}
+
+void readPlyBinary(const std::string& path, const std::string& data, size_t body,
+                   const PlyHeader& h, Cloud& c) {
+  const size_t n = c.width, left = data.size() - body;
+  std::vector<size_t> off(h.props.size());
+  size_t rec = 0;
+  for (size_t i = 0; i < h.props.size(); ++i) {
+    off[i] = rec;
+    rec += h.props[i].size;
+  }
+  const auto need = mulSize(n, rec);
+  if (!need || left < *need)
+    throw InputError(path + ": PLY binary data truncated: " + std::to_string(left) + " bytes of " +
+                     (need ? std::to_string(*need) : std::string("(overflow)")) + " for " +
+                     std::to_string(n) + " vertices");
+  if (!h.other_elements && left - *need >= rec)
+    throw InputError(path + ": PLY has " + std::to_string(left - *need) + " bytes after its " +
+                     std::to_string(n) +
+                     " vertices (more vertices than 'element vertex' declares?)");
+  checkDeclaredPoints(path, "PLY header (binary vertex element)", n, left, rec);
+  c.points.resize(n);
+  const char* b = data.data() + body;
+  for (size_t k = 0; k < n; ++k) {
+    float v[3];
+    for (int a = 0; a < 3; ++a) {
+      const PlyProp& p = h.props[h.idx[a]];
+      v[a] = static_cast<float>(readScalar(b + k * rec + off[h.idx[a]], plyKind(p.type), p.size));
+    }
+    c.points[k] = {v[0], v[1], v[2]};
+  }
+}
+
+}  // namespace
+
+Cloud readPly(const std::string& path) {
+  const std::string data = slurpFile(path);
+  PlyLines in{path, data};
+  const PlyHeader h = readPlyHeader(in);
+  const size_t body = in.pos;  // <= data.size(), also when end_header has no newline
+  Cloud c;
+  c.width = static_cast<size_t>(h.nvert);
+  c.height = 1;
+  if (h.format == "ascii")
+    readPlyAscii(path, data, body, h, c);
+  else if (h.format == "binary_little_endian")
+    readPlyBinary(path, data, body, h, c);
+  else if (h.format.empty())
+    throw InputError(path + ": PLY header has no format line");
+  else
+    throw InputError(path + ": PLY format '" + printable(h.format) +
+                     "' is not supported (ascii or binary_little_endian)");
   return c;
 }
 
