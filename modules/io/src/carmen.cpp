@@ -541,60 +541,317 @@ std::string CarmenImportStats::notesText() const {
 CarmenImportError::CarmenImportError(const std::string& what, CarmenImportStats s)
     : InputError(what), stats(std::move(s)) {}
 
-CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
+namespace {
+
+void checkOptions(const CarmenImportOptions& opt) {
   if (opt.output.empty()) throw InputError("no output rawlog given");
   if (!(opt.max_range >= 0) || !std::isfinite(opt.max_range))
     throw InputError("max range must be a finite number >= 0 (0: from the log)");
   if (opt.compression < 1 || opt.compression > 9)
     throw InputError("compression level must be 1..9");
-  LineSource src(opt.input);  // checks the input before any output exists
-  {
-    std::error_code ec;
-    if (fs::exists(opt.output, ec) && fs::equivalent(opt.input, opt.output, ec))
-      throw InputError(opt.output + ": the output would overwrite the input log");
+}
+
+void checkOutputNotInput(const CarmenImportOptions& opt) {
+  std::error_code ec;
+  if (fs::exists(opt.output, ec) && fs::equivalent(opt.input, opt.output, ec))
+    throw InputError(opt.output + ": the output would overwrite the input log");
+}
+
+std::string tumPathOf(const CarmenImportOptions& opt) {
+  return !opt.write_tum ? std::string() : (opt.tum.empty() ? defaultTumPath(opt.output) : opt.tum);
+}
+
+/** Found now rather than after a long conversion. */
+void checkTumPath(const CarmenImportOptions& opt, const std::string& tum_path) {
+  std::error_code ec;
+  const fs::path dir = fs::path(tum_path).parent_path();
+  if (!dir.empty() && !fs::is_directory(dir, ec))
+    throw InputError(tum_path + ": cannot write the trajectory: no directory " + dir.string());
+  if (fs::exists(tum_path, ec) && fs::equivalent(opt.input, tum_path, ec))
+    throw InputError(tum_path + ": the trajectory would overwrite the input log");
+  if (fs::path(tum_path).lexically_normal() == fs::path(opt.output).lexically_normal())
+    throw InputError(tum_path + ": the trajectory and the rawlog are the same file");
+}
+
+/** The header of a RAWLASERk or ROBOTLASERk line, up to its remissions. */
+struct RawLaserHeader {
+  ScanGeometry g;
+  double fov = 0, res = 0, maxr = 0, acc = 0;
+  size_t n = 0, m = 0;  ///< readings, remissions
+};
+
+/** The robot's pose, speeds and laser mount of a ROBOTLASERk line from field p. */
+struct RobotLaserTail {
+  CPose2D robot, mount;
+  std::pair<double, double> vel;
+};
+
+/** The conversion pass: the lines of the log into a temporary rawlog. */
+class CarmenConverter {
+ public:
+  CarmenConverter(const CarmenImportOptions& opt, LineSource& src, CarmenImportStats& st)
+      : opt_(opt),
+        src_(src),
+        st_(st),
+        tmp_(opt.output + ".tmp"),
+        progress_("carmen " + opt.input, src.fileSize(), false),
+        laser_odom_(st.odometry_source == CarmenOdometry::Laser),
+        odom_lines_(st.odometry_source == CarmenOdometry::Odom) {
+    if (!out_.open(tmp_, opt.compression))
+      throw InputError(opt.output + ": cannot write the rawlog (does the directory exist?)");
+    if (!opt.progress) progress_.setEnabled(false);
   }
 
-  CarmenImportStats st;
-  st.odometry_source =
-      opt.odometry == CarmenOdometry::Auto ? chooseOdometry(opt.input) : opt.odometry;
-  const std::string tum_path =
-      !opt.write_tum ? std::string() : (opt.tum.empty() ? defaultTumPath(opt.output) : opt.tum);
-  if (!tum_path.empty()) {
-    // Found now rather than after a long conversion.
-    std::error_code ec;
-    const fs::path dir = fs::path(tum_path).parent_path();
-    if (!dir.empty() && !fs::is_directory(dir, ec))
-      throw InputError(tum_path + ": cannot write the trajectory: no directory " + dir.string());
-    if (fs::exists(tum_path, ec) && fs::equivalent(opt.input, tum_path, ec))
-      throw InputError(tum_path + ": the trajectory would overwrite the input log");
-    if (fs::path(tum_path).lexically_normal() == fs::path(opt.output).lexically_normal())
-      throw InputError(tum_path + ": the trajectory and the rawlog are the same file");
-  }
-
-  const std::string tmp = opt.output + ".tmp";
-  mrpt::io::CFileGZOutputStream out;
-  if (!out.open(tmp, opt.compression))
-    throw InputError(opt.output + ": cannot write the rawlog (does the directory exist?)");
-
-  Trajectory2D traj;
-  LogParams par;
-  Progress progress("carmen " + opt.input, src.fileSize(), false);
-  if (!opt.progress) progress.setEnabled(false);
-  bool have_prev_scan = false;
-  double prev_scan_t = 0;
-
-  auto emitted = [&](double t) {
-    if (st.observations == 0) {
-      st.first_time = st.min_time = st.max_time = t;
+  /** Converts every line; the first malformed line stops it and is returned. */
+  std::optional<BadLine> run() {
+    std::string line;
+    std::vector<std::string_view> tok;
+    bool complete = true;
+    std::optional<BadLine> failure;
+    try {
+      while (src_.next(line, complete)) convertLine(line, complete, tok);
+      src_.checkComplete();
+    } catch (const BadLine& e) {
+      failure = e;
+    } catch (...) {
+      out_.close();
+      removeTemporary();
+      throw;
     }
-    st.last_time = t;
-    st.min_time = std::min(st.min_time, t);
-    st.max_time = std::max(st.max_time, t);
-    ++st.observations;
-  };
+    progress_.finish();
+    out_.close();
+    return failure;
+  }
 
-  auto writeOdometry = [&](const CPose2D& pose, std::optional<std::pair<double, double>> vel,
-                           mrpt::Clock::time_point stamp, double t) {
+  const std::string& temporary() const { return tmp_; }
+  void removeTemporary() const {
+    std::error_code ec;
+    fs::remove(tmp_, ec);
+  }
+  Trajectory2D& trajectory() { return traj_; }
+
+ private:
+  void convertLine(const std::string& line, bool complete, std::vector<std::string_view>& tok) {
+    ++st_.lines;
+    if ((st_.lines & 255) == 0) progress_.update(src_.filePosition(), st_.lines);
+    splitFields(line, tok);
+    if (tok.empty()) return;
+    if (tok[0][0] == '#') {
+      ++st_.comments;
+      return;
+    }
+    const Fields f(opt_.input, src_.lineNumber(), complete, tok);
+    const std::string_view type = tok[0];
+    if (type == "PARAM") return readParam(f);
+    if (type == "FLASER" || type == "RLASER" || hasDigitSuffix(type, "LASER"))
+      return readOldLaser(f);
+    const bool raw = hasDigitSuffix(type, "RAWLASER");
+    const bool robot = hasDigitSuffix(type, "ROBOTLASER");
+    if (raw || robot) return readNewLaser(f, robot);
+    if (type == "ODOM") return readOdom(f);
+    skipUnknown(f, complete);
+  }
+
+  void readParam(const Fields& f) {
+    ++st_.params;
+    f.need(3, "param_value");
+    const std::string_view name = f[1];
+    auto number = [&](double& dst, bool positive) {
+      const double v = f.bounded(2, std::string(name), kMaxRangeBound, "");
+      if (positive && !(v > 0)) f.fail(std::string(name) + " must be > 0");
+      dst = v;
+    };
+    if (name == "robot_front_laser_max") number(par_.front_max, true);
+    if (name == "robot_rear_laser_max") number(par_.rear_max, true);
+    if (name == "laser_front_laser_resolution") number(par_.front_resolution, true);
+    if (name == "laser_rear_laser_resolution") number(par_.rear_resolution, true);
+    if (name == "robot_frontlaser_offset") number(par_.front_offset, false);
+    if (name == "robot_rearlaser_offset") number(par_.rear_offset, false);
+  }
+
+  /** num_readings of a line of `type`, checked against its field count. */
+  static size_t readingCount(const Fields& f, size_t i) {
+    const size_t n = f.count(i, "num_readings");
+    if (n > f.size())
+      f.fail("num_readings is " + std::to_string(n) + " but the line has only " +
+             std::to_string(f.size()) + " fields");
+    return n;
+  }
+
+  /** The line's timestamp, or empty (and counted) for a negative one. */
+  std::optional<mrpt::Clock::time_point> stampOrSkip(const Fields& f, double& t) {
+    const auto stamp = f.timestamp(t);
+    if (!stamp) ++st_.negative_time[f.type()];
+    return stamp;
+  }
+
+  // FLASER/RLASER n r1..rn x y theta odom_x odom_y odom_theta ts host lts
+  // LASERk n r1..rn ts host lts
+  void readOldLaser(const Fields& f) {
+    const std::string_view type = f[0];
+    const bool front = type == "FLASER", rear = type == "RLASER";
+    f.need(2, "num_readings");
+    const size_t n = readingCount(f, 1);
+    const size_t poses = (front || rear) ? 6 : 0;
+    f.exact(2 + n + poses + 3, std::string(type) + " num_readings=" + std::to_string(n) + ": " +
+                                   std::to_string(n) + " readings, " +
+                                   (poses ? "x y theta odom_x odom_y odom_theta, " : "") +
+                                   "ipc_timestamp ipc_hostname logger_timestamp");
+    double t = 0;
+    const auto stamp = stampOrSkip(f, t);
+    if (!stamp) return;
+    buildScan(f, 2, n, oldLaserGeometry(n, front, rear), oldLaserMount(front, rear), *stamp);
+    if (poses) readOldLaserPoses(f, 2 + n, front, *stamp, t);
+    writeScan(n, t);
+  }
+
+  ScanGeometry oldLaserGeometry(size_t n, bool front, bool rear) const {
+    ScanGeometry g;
+    g.increment = oldLaserIncrement(n, front  ? par_.front_resolution
+                                       : rear ? par_.rear_resolution
+                                              : 0);
+    const double pmax = front ? par_.front_max : rear ? par_.rear_max : 0;
+    if (pmax > 0) g.max_range = pmax;
+    return g;
+  }
+
+  CPose2D oldLaserMount(bool front, bool rear) const {
+    CPose2D mount;
+    if (front) mount = CPose2D(par_.front_offset, 0, 0);
+    if (rear) mount = CPose2D(-par_.rear_offset, 0, kPi);
+    return mount;
+  }
+
+  /** The laser and odometry poses of FLASER/RLASER from field p. */
+  void readOldLaserPoses(const Fields& f, size_t p, bool front, mrpt::Clock::time_point stamp,
+                         double t) {
+    const CPose2D laser(f.coordinate(p, "x"), f.coordinate(p + 1, "y"), f.angle(p + 2, "theta"));
+    const CPose2D odo(f.coordinate(p + 3, "odom_x"), f.coordinate(p + 4, "odom_y"),
+                      f.angle(p + 5, "odom_theta"));
+    if (laser_odom_) writeOdometry(odo, std::nullopt, stamp, t);
+    if (front) {
+      // CARMEN logs the front laser's pose; the robot is offset behind it.
+      const CPose2D robot = laser + CPose2D(-par_.front_offset, 0, 0);
+      traj_.push_back({t, robot.x(), robot.y(), robot.phi()});
+    }
+  }
+
+  // type start fov res max_range accuracy remission_mode n r.. m rem.. [poses..] ts host lts
+  void readNewLaser(const Fields& f, bool robot) {
+    const RawLaserHeader h = readRawLaserHeader(f, robot);
+    double t = 0;
+    const auto stamp = stampOrSkip(f, t);
+    if (!stamp) return;
+    const ScanGeometry g = rawLaserGeometry(f, h);
+    std::optional<RobotLaserTail> tail;
+    if (robot) tail = readRobotLaserTail(f, 10 + h.n + h.m);
+    buildScan(f, 9, h.n, g, tail ? tail->mount : CPose2D(), *stamp);
+    if (tail) {
+      if (laser_odom_) writeOdometry(tail->robot, tail->vel, *stamp, t);
+      traj_.push_back({t, tail->robot.x(), tail->robot.y(), tail->robot.phi()});
+    }
+    writeScan(h.n, t);
+  }
+
+  static RawLaserHeader readRawLaserHeader(const Fields& f, bool robot) {
+    f.need(9, "num_readings");
+    RawLaserHeader h;
+    (void)f.real(1, "laser_type");
+    h.g.start = f.angle(2, "start_angle");
+    h.fov = f.angle(3, "field_of_view");
+    h.res = f.angle(4, "angular_resolution");
+    h.maxr = f.bounded(5, "maximum_range", kMaxRangeBound, "m");
+    h.acc = f.bounded(6, "accuracy", kMaxRangeBound, "m");
+    (void)f.real(7, "remission_mode");
+    h.n = readingCount(f, 8);
+    f.need(10 + h.n, "num_remissions after " + std::to_string(h.n) + " readings");
+    h.m = f.count(9 + h.n, "num_remissions");
+    if (h.m > f.size())
+      f.fail("num_remissions is " + std::to_string(h.m) + " but the line has only " +
+             std::to_string(f.size()) + " fields");
+    const size_t tail = robot ? 11 : 0;
+    f.exact(10 + h.n + h.m + tail + 3,
+            std::string(f[0]) + " num_readings=" + std::to_string(h.n) +
+                " num_remissions=" + std::to_string(h.m) +
+                (robot ? ", laser_pose x y theta, robot_pose x y theta, laser_tv laser_rv "
+                         "forward_safety_dist side_safety_dist turn_axis"
+                       : "") +
+                ", ipc_timestamp ipc_hostname logger_timestamp");
+    for (size_t k = 0; k < h.m; ++k)
+      (void)f.anyNumber(10 + h.n + k, "remission " + std::to_string(k));
+    return h;
+  }
+
+  static ScanGeometry rawLaserGeometry(const Fields& f, const RawLaserHeader& h) {
+    ScanGeometry g = h.g;
+    if (h.res > 0)
+      g.increment = h.res;
+    else if (h.fov > 0 && h.n > 1)
+      g.increment = h.fov / static_cast<double>(h.n - 1);
+    else if (h.n > 1)
+      f.fail("angular_resolution and field_of_view are both <= 0");
+    if (h.maxr > 0) g.max_range = h.maxr;
+    if (h.acc > 0) g.accuracy = h.acc;
+    return g;
+  }
+
+  static RobotLaserTail readRobotLaserTail(const Fields& f, size_t p) {
+    RobotLaserTail r;
+    const CPose2D laser(f.coordinate(p, "laser_pose_x"), f.coordinate(p + 1, "laser_pose_y"),
+                        f.angle(p + 2, "laser_pose_theta"));
+    r.robot = CPose2D(f.coordinate(p + 3, "robot_pose_x"), f.coordinate(p + 4, "robot_pose_y"),
+                      f.angle(p + 5, "robot_pose_theta"));
+    r.vel = {f.speed(p + 6, "laser_tv"), f.speed(p + 7, "laser_rv")};
+    (void)f.real(p + 8, "forward_safety_dist");
+    (void)f.real(p + 9, "side_safety_dist");
+    (void)f.real(p + 10, "turn_axis");
+    r.mount = laser - r.robot;  // the laser in the robot's frame
+    return r;
+  }
+
+  void readOdom(const Fields& f) {
+    f.exact(10, "ODOM x y theta tv rv accel ipc_timestamp ipc_hostname logger_timestamp");
+    const CPose2D pose(f.coordinate(1, "x"), f.coordinate(2, "y"), f.angle(3, "theta"));
+    const double tv = f.speed(4, "tv"), rv = f.speed(5, "rv");
+    (void)f.speed(6, "accel");
+    double t = 0;
+    const auto stamp = f.timestamp(t);
+    if (!stamp) {
+      ++st_.negative_time["ODOM"];
+      return;
+    }
+    if (odom_lines_)
+      writeOdometry(pose, std::make_pair(tv, rv), *stamp, t);
+    else
+      ++st_.unused["ODOM"];
+  }
+
+  void skipUnknown(const Fields& f, bool complete) {
+    const std::string_view type = f[0];
+    // A log cut inside the name of its last message.
+    if (!complete)
+      for (const char* known : {"FLASER", "RLASER", "ROBOTLASER", "RAWLASER", "ODOM", "PARAM"})
+        if (std::string_view(known).substr(0, type.size()) == type)
+          f.fail("the message name is cut short");
+    const std::string name = printable(type);
+    if (st_.unknown.size() < 100 || st_.unknown.count(name))
+      ++st_.unknown[name];
+    else
+      ++st_.unknown["(other)"];
+  }
+
+  void emitted(double t) {
+    if (st_.observations == 0) {
+      st_.first_time = st_.min_time = st_.max_time = t;
+    }
+    st_.last_time = t;
+    st_.min_time = std::min(st_.min_time, t);
+    st_.max_time = std::max(st_.max_time, t);
+    ++st_.observations;
+  }
+
+  void writeOdometry(const CPose2D& pose, std::optional<std::pair<double, double>> vel,
+                     mrpt::Clock::time_point stamp, double t) {
     mrpt::obs::CObservationOdometry o;
     o.sensorLabel = "ODOMETRY";
     o.timestamp = stamp;
@@ -603,295 +860,144 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
       o.hasVelocities = true;
       o.velocityLocal = mrpt::math::TTwist2D(vel->first, 0, vel->second);
     }
-    writeObject(out, o);
-    ++st.odometry;
+    writeObject(out_, o);
+    ++st_.odometry;
     emitted(t);
-  };
+  }
 
   // Builds (and so checks) the scan whose readings are fields [first, first + n)
   // before anything of its line is written: a bad line adds nothing.
-  mrpt::obs::CObservation2DRangeScan scan;
-  uint64_t pending_bad_readings = 0;  // of the scan built last
-  auto buildScan = [&](const Fields& f, size_t first, size_t n, const ScanGeometry& g,
-                       const CPose2D& mount, mrpt::Clock::time_point stamp) {
+  void buildScan(const Fields& f, size_t first, size_t n, const ScanGeometry& g,
+                 const CPose2D& mount, mrpt::Clock::time_point stamp) {
     const double aperture = n ? static_cast<double>(n - 1) * g.increment : 0;
     if (!(aperture <= 2 * kPi + 1e-6))
       f.fail(std::to_string(n) + " readings " + fmtNumber(g.increment * 180 / kPi, 4) +
              " deg apart span more than 360 deg");
-    const double max_range = opt.max_range > 0 ? opt.max_range : g.max_range;
-    scan.sensorLabel = f.type();
-    scan.timestamp = stamp;
-    scan.aperture = static_cast<float>(aperture);
-    scan.rightToLeft = true;
-    scan.maxRange = static_cast<float>(max_range);
-    scan.stdError = static_cast<float>(g.accuracy);
-    scan.resizeScan(n);
+    const double max_range = opt_.max_range > 0 ? opt_.max_range : g.max_range;
+    scan_.sensorLabel = f.type();
+    scan_.timestamp = stamp;
+    scan_.aperture = static_cast<float>(aperture);
+    scan_.rightToLeft = true;
+    scan_.maxRange = static_cast<float>(max_range);
+    scan_.stdError = static_cast<float>(g.accuracy);
+    scan_.resizeScan(n);
+    pending_bad_readings_ = readRanges(f, first, n, max_range);
+    // MRPT's beams are symmetric about the sensor's x axis: turn the sensor
+    // to the middle of CARMEN's [start, start + aperture].
+    scan_.sensorPose = mrpt::poses::CPose3D(mount + CPose2D(0, 0, g.start + aperture / 2));
+  }
+
+  /** Fills the scan's ranges; returns how many are nan, inf or negative. */
+  uint64_t readRanges(const Fields& f, size_t first, size_t n, double max_range) {
     uint64_t not_finite = 0;
     for (size_t i = 0; i < n; ++i) {
       const double r = f.anyNumber(first + i, "reading " + std::to_string(i));
       if (!std::isfinite(r) || r < 0) ++not_finite;
       const bool valid = std::isfinite(r) && r > 0 && r < max_range;
       // Invalid readings are stored as the maximum range (1e300 fits no float).
-      scan.setScanRange(i, valid ? static_cast<float>(r) : static_cast<float>(max_range));
-      scan.setScanRangeValidity(i, valid);
+      scan_.setScanRange(i, valid ? static_cast<float>(r) : static_cast<float>(max_range));
+      scan_.setScanRangeValidity(i, valid);
     }
-    pending_bad_readings = not_finite;
-    // MRPT's beams are symmetric about the sensor's x axis: turn the sensor
-    // to the middle of CARMEN's [start, start + aperture].
-    scan.sensorPose = mrpt::poses::CPose3D(mount + CPose2D(0, 0, g.start + aperture / 2));
-  };
-  auto writeScan = [&](size_t n, double t) {
+    return not_finite;
+  }
+
+  void writeScan(size_t n, double t) {
     if (n == 0) {  // MRPT's scan code divides by the beam count
-      ++st.empty_scans;
+      ++st_.empty_scans;
       return;
     }
-    if (pending_bad_readings) {
-      st.bad_readings += pending_bad_readings;
-      ++st.scans_with_bad_readings;
-      if (!st.first_bad_reading_line) st.first_bad_reading_line = src.lineNumber();
+    if (pending_bad_readings_) {
+      st_.bad_readings += pending_bad_readings_;
+      ++st_.scans_with_bad_readings;
+      if (!st_.first_bad_reading_line) st_.first_bad_reading_line = src_.lineNumber();
     }
-    writeObject(out, scan);
-    ++st.scans[scan.sensorLabel];
-    if (have_prev_scan) {
-      if (t < prev_scan_t) ++st.scans_time_backwards;
-      if (t == prev_scan_t) ++st.scans_time_repeated;
+    writeObject(out_, scan_);
+    ++st_.scans[scan_.sensorLabel];
+    if (have_prev_scan_) {
+      if (t < prev_scan_t_) ++st_.scans_time_backwards;
+      if (t == prev_scan_t_) ++st_.scans_time_repeated;
     }
-    have_prev_scan = true;
-    prev_scan_t = t;
+    have_prev_scan_ = true;
+    prev_scan_t_ = t;
     emitted(t);
-  };
-
-  const bool laser_odom = st.odometry_source == CarmenOdometry::Laser;
-  const bool odom_lines = st.odometry_source == CarmenOdometry::Odom;
-
-  std::string line;
-  std::vector<std::string_view> tok;
-  bool complete = true;
-  std::optional<BadLine> failure;
-  try {
-    while (src.next(line, complete)) {
-      ++st.lines;
-      if ((st.lines & 255) == 0) progress.update(src.filePosition(), st.lines);
-      splitFields(line, tok);
-      if (tok.empty()) continue;
-      if (tok[0][0] == '#') {
-        ++st.comments;
-        continue;
-      }
-      const Fields f(opt.input, src.lineNumber(), complete, tok);
-      const std::string_view type = tok[0];
-
-      if (type == "PARAM") {
-        ++st.params;
-        f.need(3, "param_value");
-        const std::string_view name = tok[1];
-        auto number = [&](double& dst, bool positive) {
-          const double v = f.bounded(2, std::string(name), kMaxRangeBound, "");
-          if (positive && !(v > 0)) f.fail(std::string(name) + " must be > 0");
-          dst = v;
-        };
-        if (name == "robot_front_laser_max") number(par.front_max, true);
-        if (name == "robot_rear_laser_max") number(par.rear_max, true);
-        if (name == "laser_front_laser_resolution") number(par.front_resolution, true);
-        if (name == "laser_rear_laser_resolution") number(par.rear_resolution, true);
-        if (name == "robot_frontlaser_offset") number(par.front_offset, false);
-        if (name == "robot_rearlaser_offset") number(par.rear_offset, false);
-        continue;
-      }
-
-      if (type == "FLASER" || type == "RLASER" || hasDigitSuffix(type, "LASER")) {
-        // FLASER/RLASER n r1..rn x y theta odom_x odom_y odom_theta ts host lts
-        // LASERk n r1..rn ts host lts
-        const bool front = type == "FLASER", rear = type == "RLASER";
-        f.need(2, "num_readings");
-        const size_t n = f.count(1, "num_readings");
-        const size_t poses = (front || rear) ? 6 : 0;
-        if (n > tok.size())
-          f.fail("num_readings is " + std::to_string(n) + " but the line has only " +
-                 std::to_string(tok.size()) + " fields");
-        f.exact(2 + n + poses + 3, std::string(type) + " num_readings=" + std::to_string(n) + ": " +
-                                       std::to_string(n) + " readings, " +
-                                       (poses ? "x y theta odom_x odom_y odom_theta, " : "") +
-                                       "ipc_timestamp ipc_hostname logger_timestamp");
-        double t = 0;
-        const auto stamp_or = f.timestamp(t);
-        if (!stamp_or) {
-          ++st.negative_time[f.type()];
-          continue;
-        }
-        const auto stamp = *stamp_or;
-        ScanGeometry g;
-        g.increment = oldLaserIncrement(n, front  ? par.front_resolution
-                                           : rear ? par.rear_resolution
-                                                  : 0);
-        const double pmax = front ? par.front_max : rear ? par.rear_max : 0;
-        if (pmax > 0) g.max_range = pmax;
-        CPose2D mount;
-        if (front) mount = CPose2D(par.front_offset, 0, 0);
-        if (rear) mount = CPose2D(-par.rear_offset, 0, kPi);
-        buildScan(f, 2, n, g, mount, stamp);
-        if (poses) {
-          const size_t p = 2 + n;
-          const CPose2D laser(f.coordinate(p, "x"), f.coordinate(p + 1, "y"),
-                              f.angle(p + 2, "theta"));
-          const CPose2D odo(f.coordinate(p + 3, "odom_x"), f.coordinate(p + 4, "odom_y"),
-                            f.angle(p + 5, "odom_theta"));
-          if (laser_odom) writeOdometry(odo, std::nullopt, stamp, t);
-          if (front) {
-            // CARMEN logs the front laser's pose; the robot is offset behind it.
-            const CPose2D robot = laser + CPose2D(-par.front_offset, 0, 0);
-            traj.push_back({t, robot.x(), robot.y(), robot.phi()});
-          }
-        }
-        writeScan(n, t);
-        continue;
-      }
-
-      const bool raw = hasDigitSuffix(type, "RAWLASER");
-      const bool robot = hasDigitSuffix(type, "ROBOTLASER");
-      if (raw || robot) {
-        // type start fov res max_range accuracy remission_mode n r.. m rem.. [poses..] ts host lts
-        f.need(9, "num_readings");
-        ScanGeometry g;
-        (void)f.real(1, "laser_type");
-        g.start = f.angle(2, "start_angle");
-        const double fov = f.angle(3, "field_of_view");
-        const double res = f.angle(4, "angular_resolution");
-        const double maxr = f.bounded(5, "maximum_range", kMaxRangeBound, "m");
-        const double acc = f.bounded(6, "accuracy", kMaxRangeBound, "m");
-        (void)f.real(7, "remission_mode");
-        const size_t n = f.count(8, "num_readings");
-        if (n > tok.size())
-          f.fail("num_readings is " + std::to_string(n) + " but the line has only " +
-                 std::to_string(tok.size()) + " fields");
-        f.need(10 + n, "num_remissions after " + std::to_string(n) + " readings");
-        const size_t m = f.count(9 + n, "num_remissions");
-        if (m > tok.size())
-          f.fail("num_remissions is " + std::to_string(m) + " but the line has only " +
-                 std::to_string(tok.size()) + " fields");
-        const size_t tail = robot ? 11 : 0;
-        f.exact(10 + n + m + tail + 3,
-                std::string(type) + " num_readings=" + std::to_string(n) +
-                    " num_remissions=" + std::to_string(m) +
-                    (robot ? ", laser_pose x y theta, robot_pose x y theta, laser_tv laser_rv "
-                             "forward_safety_dist side_safety_dist turn_axis"
-                           : "") +
-                    ", ipc_timestamp ipc_hostname logger_timestamp");
-        for (size_t k = 0; k < m; ++k)
-          (void)f.anyNumber(10 + n + k, "remission " + std::to_string(k));
-        double t = 0;
-        const auto stamp_or = f.timestamp(t);
-        if (!stamp_or) {
-          ++st.negative_time[f.type()];
-          continue;
-        }
-        const auto stamp = *stamp_or;
-        if (res > 0)
-          g.increment = res;
-        else if (fov > 0 && n > 1)
-          g.increment = fov / static_cast<double>(n - 1);
-        else if (n > 1)
-          f.fail("angular_resolution and field_of_view are both <= 0");
-        if (maxr > 0) g.max_range = maxr;
-        if (acc > 0) g.accuracy = acc;
-        std::optional<CPose2D> rob;
-        std::pair<double, double> vel;
-        CPose2D mount;
-        if (robot) {
-          const size_t p = 10 + n + m;
-          const CPose2D laser(f.coordinate(p, "laser_pose_x"), f.coordinate(p + 1, "laser_pose_y"),
-                              f.angle(p + 2, "laser_pose_theta"));
-          rob = CPose2D(f.coordinate(p + 3, "robot_pose_x"), f.coordinate(p + 4, "robot_pose_y"),
-                        f.angle(p + 5, "robot_pose_theta"));
-          vel = {f.speed(p + 6, "laser_tv"), f.speed(p + 7, "laser_rv")};
-          (void)f.real(p + 8, "forward_safety_dist");
-          (void)f.real(p + 9, "side_safety_dist");
-          (void)f.real(p + 10, "turn_axis");
-          mount = laser - *rob;  // the laser in the robot's frame
-        }
-        buildScan(f, 9, n, g, mount, stamp);
-        if (rob) {
-          if (laser_odom) writeOdometry(*rob, vel, stamp, t);
-          traj.push_back({t, rob->x(), rob->y(), rob->phi()});
-        }
-        writeScan(n, t);
-        continue;
-      }
-
-      if (type == "ODOM") {
-        f.exact(10, "ODOM x y theta tv rv accel ipc_timestamp ipc_hostname logger_timestamp");
-        const CPose2D pose(f.coordinate(1, "x"), f.coordinate(2, "y"), f.angle(3, "theta"));
-        const double tv = f.speed(4, "tv"), rv = f.speed(5, "rv");
-        (void)f.speed(6, "accel");
-        double t = 0;
-        const auto stamp = f.timestamp(t);
-        if (!stamp) {
-          ++st.negative_time["ODOM"];
-          continue;
-        }
-        if (odom_lines)
-          writeOdometry(pose, std::make_pair(tv, rv), *stamp, t);
-        else
-          ++st.unused["ODOM"];
-        continue;
-      }
-
-      // A log cut inside the name of its last message.
-      if (!complete)
-        for (const char* known : {"FLASER", "RLASER", "ROBOTLASER", "RAWLASER", "ODOM", "PARAM"})
-          if (std::string_view(known).substr(0, type.size()) == type)
-            f.fail("the message name is cut short");
-      const std::string name = printable(type);
-      if (st.unknown.size() < 100 || st.unknown.count(name))
-        ++st.unknown[name];
-      else
-        ++st.unknown["(other)"];
-    }
-    src.checkComplete();
-  } catch (const BadLine& e) {
-    failure = e;
-  } catch (...) {
-    out.close();
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw;
   }
-  progress.finish();
-  out.close();
 
+  const CarmenImportOptions& opt_;
+  LineSource& src_;
+  CarmenImportStats& st_;
+  const std::string tmp_;
+  mrpt::io::CFileGZOutputStream out_;
+  Progress progress_;
+  const bool laser_odom_, odom_lines_;
+  Trajectory2D traj_;
+  LogParams par_;
+  bool have_prev_scan_ = false;
+  double prev_scan_t_ = 0;
+  mrpt::obs::CObservation2DRangeScan scan_;
+  uint64_t pending_bad_readings_ = 0;  // of the scan built last
+};
+
+[[noreturn]] void failNothingConverted(const CarmenImportOptions& opt, const CarmenImportStats& st,
+                                       const std::optional<BadLine>& failure) {
+  if (failure)
+    throw InputError(std::string(failure->what()) +
+                     "; nothing was converted before it, no file written");
+  std::string what = opt.input + ": nothing to convert: no laser or odometry message in " +
+                     std::to_string(st.lines) + " lines";
+  if (!st.unknown.empty()) what += " (skipped: " + joinCounts(st.unknown) + ")";
+  if (!st.unused.empty()) what += " (not used: " + joinCounts(st.unused) + ")";
+  throw InputError(what);
+}
+
+void moveRawlogInPlace(const CarmenImportOptions& opt, const CarmenConverter& conv) {
   std::error_code ec;
-  if (st.observations == 0) {
-    fs::remove(tmp, ec);
-    if (failure)
-      throw InputError(std::string(failure->what()) +
-                       "; nothing was converted before it, no file written");
-    std::string what = opt.input + ": nothing to convert: no laser or odometry message in " +
-                       std::to_string(st.lines) + " lines";
-    if (!st.unknown.empty()) what += " (skipped: " + joinCounts(st.unknown) + ")";
-    if (!st.unused.empty()) what += " (not used: " + joinCounts(st.unused) + ")";
-    throw InputError(what);
-  }
-  fs::rename(tmp, opt.output, ec);
+  fs::rename(conv.temporary(), opt.output, ec);
   if (ec) {
-    fs::remove(tmp, ec);
+    conv.removeTemporary();
     throw std::runtime_error(opt.output + ": cannot write the rawlog: " + ec.message());
   }
+}
+
+void writeTrajectory(const std::string& tum_path, Trajectory2D& traj, CarmenImportStats& st) {
+  if (tum_path.empty() || traj.empty()) return;
+  std::stable_sort(traj.begin(), traj.end(),
+                   [](const TimedPose2D& a, const TimedPose2D& b) { return a.t < b.t; });
+  writeTum(tum_path, traj);
+  st.tum = tum_path;
+  st.tum_poses = traj.size();
+}
+
+[[noreturn]] void failPartlyConverted(const BadLine& failure, const CarmenImportStats& st) {
+  std::string what = std::string(failure.what()) + "; the " + std::to_string(failure.lines_before) +
+                     " lines before it were converted: " + st.output + " (" +
+                     std::to_string(st.observations) + " observations)";
+  if (!st.tum.empty()) what += ", " + st.tum + " (" + std::to_string(st.tum_poses) + " poses)";
+  throw CarmenImportError(what, st);
+}
+
+}  // namespace
+
+CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
+  checkOptions(opt);
+  LineSource src(opt.input);  // checks the input before any output exists
+  checkOutputNotInput(opt);
+
+  CarmenImportStats st;
+  st.odometry_source =
+      opt.odometry == CarmenOdometry::Auto ? chooseOdometry(opt.input) : opt.odometry;
+  const std::string tum_path = tumPathOf(opt);
+  if (!tum_path.empty()) checkTumPath(opt, tum_path);
+
+  CarmenConverter conv(opt, src, st);
+  const std::optional<BadLine> failure = conv.run();
+  if (st.observations == 0) {
+    conv.removeTemporary();
+    failNothingConverted(opt, st, failure);
+  }
+  moveRawlogInPlace(opt, conv);
   st.output = opt.output;
-  if (!tum_path.empty() && !traj.empty()) {
-    std::stable_sort(traj.begin(), traj.end(),
-                     [](const TimedPose2D& a, const TimedPose2D& b) { return a.t < b.t; });
-    writeTum(tum_path, traj);
-    st.tum = tum_path;
-    st.tum_poses = traj.size();
-  }
-  if (failure) {
-    std::string what = std::string(failure->what()) + "; the " +
-                       std::to_string(failure->lines_before) +
-                       " lines before it were converted: " + st.output + " (" +
-                       std::to_string(st.observations) + " observations)";
-    if (!st.tum.empty()) what += ", " + st.tum + " (" + std::to_string(st.tum_poses) + " poses)";
-    throw CarmenImportError(what, st);
-  }
+  writeTrajectory(tum_path, conv.trajectory(), st);
+  if (failure) failPartlyConverted(*failure, st);
   return st;
 }
 

@@ -79,48 +79,55 @@ bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip)
   return true;
 }
 
-std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) const {
-  auto cellOf = [&](const TPoint2D& p, const char* what) {
-    std::ostringstream m;
-    m << what << " (" << p.x << ", " << p.y << ")";
-    // Bounds in metres first: MRPT's x2idx converts to int unchecked (UBSan:
-    // a 1e300 m start was undefined behaviour before it was called outside).
-    const bool on_map = p.x >= map_.getXMin() && p.x < map_.getXMax() && p.y >= map_.getYMin() &&
-                        p.y < map_.getYMax();
-    const int ix = on_map ? map_.x2idx(p.x) : -1, iy = on_map ? map_.y2idx(p.y) : -1;
-    if (ix < 0 || iy < 0 || ix >= nx_ || iy >= ny_) {
-      m << " is outside the map";
-      throw InputError(m.str());
-    }
-    if (!free_[static_cast<size_t>(iy) * nx_ + ix]) {
-      m << " is not on free space of the map (occupied or unknown)";
-      throw InputError(m.str());
-    }
-    return std::pair<int, int>{ix, iy};
-  };
-  // Plain ints, not structured bindings: lambdas below capture them (C++17).
-  const std::pair<int, int> s_cell = cellOf(s, "start"), g_cell = cellOf(g, "goal");
-  const int sx = s_cell.first, sy = s_cell.second, gx = g_cell.first, gy = g_cell.second;
-  // Start and goal may lie closer to a wall than the robot's radius (a robot
-  // parked against a wall): cells within the radius of them that are free
-  // are passable, at a high cost, so the route can leave and reach them.
-  const double near2 = (radius_ / res_ + 1) * (radius_ / res_ + 1);
-  auto passable = [&](int x, int y) {
-    if (cellPassable(x, y)) return true;
-    if (x < 0 || y < 0 || x >= nx_ || y >= ny_) return false;
-    if (!free_[static_cast<size_t>(y) * nx_ + x]) return false;
-    const double ds = double(x - sx) * (x - sx) + double(y - sy) * (y - sy);
-    const double dg = double(x - gx) * (x - gx) + double(y - gy) * (y - gy);
-    return ds <= near2 || dg <= near2;
-  };
-  const size_t n = static_cast<size_t>(nx_) * ny_;
+namespace {
+
+using Cell = std::pair<int, int>;
+
+/** What the A* search of a route needs of the planner's grid. */
+struct SearchGrid {
+  int nx, ny;
+  double res, influence, weight;
+  const std::vector<float>& dist;
+};
+
+/** The cell of a start or goal point; refuses points off the map or not on free space. */
+Cell startOrGoalCell(const mrpt::maps::COccupancyGridMap2D& map, int nx, int ny,
+                     const std::vector<uint8_t>& free, const TPoint2D& p, const char* what) {
+  std::ostringstream m;
+  m << what << " (" << p.x << ", " << p.y << ")";
+  // Bounds in metres first: MRPT's x2idx converts to int unchecked (UBSan:
+  // a 1e300 m start was undefined behaviour before it was called outside).
+  const bool on_map =
+      p.x >= map.getXMin() && p.x < map.getXMax() && p.y >= map.getYMin() && p.y < map.getYMax();
+  const int ix = on_map ? map.x2idx(p.x) : -1, iy = on_map ? map.y2idx(p.y) : -1;
+  if (ix < 0 || iy < 0 || ix >= nx || iy >= ny) {
+    m << " is outside the map";
+    throw InputError(m.str());
+  }
+  if (!free[static_cast<size_t>(iy) * nx + ix]) {
+    m << " is not on free space of the map (occupied or unknown)";
+    throw InputError(m.str());
+  }
+  return Cell{ix, iy};
+}
+
+/** A* over 8-connected cells, cost = length x (1 + clearance penalty); the
+ *  cells from start to goal, or nullopt when the goal cannot be reached.
+ *  `passable(x, y)` admits a cell, `clear(x, y)` tells whether it is outside
+ *  the robot's radius of any obstacle (else it costs more). */
+template <class Passable, class Clear>
+std::optional<std::vector<Cell>> aStarCells(const SearchGrid& g, Cell start, Cell goal,
+                                            const Passable& passable, const Clear& clear) {
+  const int sx = start.first, sy = start.second, gx = goal.first, gy = goal.second;
+  const int nx = g.nx;
+  const size_t n = static_cast<size_t>(g.nx) * g.ny;
   std::vector<float> cost(n, std::numeric_limits<float>::infinity());
   std::vector<int32_t> parent(n, -1);
   std::vector<uint8_t> closed(n, 0);
   using Item = std::pair<float, int32_t>;
   std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
-  auto idx = [&](int x, int y) { return static_cast<int32_t>(y * nx_ + x); };
-  auto h = [&](int x, int y) { return static_cast<float>(std::hypot(x - gx, y - gy) * res_); };
+  auto idx = [&](int x, int y) { return static_cast<int32_t>(y * nx + x); };
+  auto h = [&](int x, int y) { return static_cast<float>(std::hypot(x - gx, y - gy) * g.res); };
   cost[idx(sx, sy)] = 0;
   open.push({h(sx, sy), idx(sx, sy)});
   const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1}, dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
@@ -130,7 +137,7 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
     open.pop();
     if (closed[i]) continue;
     closed[i] = 1;
-    const int x = i % nx_, y = i / nx_;
+    const int x = i % nx, y = i / nx;
     if (x == gx && y == gy) {
       found = true;
       break;
@@ -142,10 +149,10 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
       if (closed[j]) continue;
       // Diagonal steps must not cut a blocked corner.
       if (k >= 4 && (!passable(x + dx[k], y) || !passable(x, y + dy[k]))) continue;
-      const double step = (k >= 4 ? M_SQRT2 : 1.0) * res_;
-      const double d = dist_[j];
-      double penalty = d < influence_ ? weight_ * (influence_ - d) / influence_ : 0;
-      if (!cellPassable(ax, ay)) penalty += 10;  // inside the radius near start/goal
+      const double step = (k >= 4 ? M_SQRT2 : 1.0) * g.res;
+      const double d = g.dist[j];
+      double penalty = d < g.influence ? g.weight * (g.influence - d) / g.influence : 0;
+      if (!clear(ax, ay)) penalty += 10;  // inside the radius near start/goal
       const float c = cost[i] + static_cast<float>(step * (1 + penalty));
       if (c < cost[j]) {
         cost[j] = c;
@@ -155,26 +162,46 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
     }
   }
   if (!found) return std::nullopt;
-  Route r;
-  std::vector<std::pair<int, int>> cells;
-  for (int32_t i = idx(gx, gy); i >= 0; i = parent[i]) cells.emplace_back(i % nx_, i / nx_);
+  std::vector<Cell> cells;
+  for (int32_t i = idx(gx, gy); i >= 0; i = parent[i]) cells.emplace_back(i % nx, i / nx);
   std::reverse(cells.begin(), cells.end());
-  for (const auto& [x, y] : cells) r.cells.push_back({map_.idx2x(x), map_.idx2y(y)});
-  // Narrow passages (doorways): runs of path cells closer than
-  // passage_clearance to anything not free. Each is crossed straight: a
-  // waypoint before it, its throat (the narrowest cell of the run) and one
-  // after it, along the axis across the passage ([Conceicao16]: intermediate
-  // goals at doorways, reached with in-place turns).
-  struct Passage {
-    size_t centre;
-    TPoint2D before, mid, after;
-  };
+  return cells;
+}
+
+/** A narrow passage of the path, crossed straight: a waypoint before it, its
+ *  throat and one after it. */
+struct Passage {
+  size_t centre;
+  TPoint2D before, mid, after;
+};
+
+/** Of 16 directions, the one along which the clearance around `c` rises most
+ *  on both sides (a saddle of the distance field); with that clearance. */
+std::pair<TPoint2D, double> crossingAxis(const GlobalPlanner& planner, const TPoint2D& c) {
+  double best_gain = -1e9, ux = 0, uy = 0;
+  for (int k = 0; k < 16; ++k) {
+    const double th = M_PI * k / 16;
+    const double dx = std::cos(th), dy = std::sin(th);
+    const double gain = std::min(planner.clearance(c.x + dx * 0.4, c.y + dy * 0.4),
+                                 planner.clearance(c.x - dx * 0.4, c.y - dy * 0.4));
+    if (gain > best_gain) best_gain = gain, ux = dx, uy = dy;
+  }
+  return {TPoint2D{ux, uy}, best_gain};
+}
+
+// Narrow passages (doorways): runs of path cells closer than
+// passage_clearance to anything not free. Each is crossed straight: a
+// waypoint before it, its throat (the narrowest cell of the run) and one
+// after it, along the axis across the passage ([Conceicao16]: intermediate
+// goals at doorways, reached with in-place turns).
+std::vector<Passage> findPassages(const GlobalPlanner& planner, const std::vector<Cell>& cells,
+                                  const std::vector<TPoint2D>& pts, const std::vector<float>& dist,
+                                  int nx, double narrow, double approach) {
   std::vector<Passage> passages;
-  const double narrow = radius_ + passage_margin_;
+  auto clear = [&](size_t k) {
+    return dist[static_cast<size_t>(cells[k].second) * nx + cells[k].first];
+  };
   for (size_t i = 0; i < cells.size();) {
-    auto clear = [&](size_t k) {
-      return dist_[static_cast<size_t>(cells[k].second) * nx_ + cells[k].first];
-    };
     if (clear(i) >= narrow) {
       ++i;
       continue;
@@ -186,28 +213,26 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
     }
     // Only real passages (obstacles on both sides), not a path along one wall:
     // the clearance grows on both sides along the crossing axis.
-    const TPoint2D c = r.cells[best];
-    const TPoint2D a = r.cells[i > 0 ? i - 1 : i], b = r.cells[std::min(j, cells.size() - 1)];
-    double ax = b.x - a.x, ay = b.y - a.y;
-    // Crossing axis: of 16 directions, the one along which the clearance
-    // rises most on both sides (a saddle of the distance field).
-    double best_gain = -1e9, ux = 0, uy = 0;
-    for (int k = 0; k < 16; ++k) {
-      const double th = M_PI * k / 16;
-      const double dx = std::cos(th), dy = std::sin(th);
-      const double gain = std::min(clearance(c.x + dx * 0.4, c.y + dy * 0.4),
-                                   clearance(c.x - dx * 0.4, c.y - dy * 0.4));
-      if (gain > best_gain) best_gain = gain, ux = dx, uy = dy;
-    }
-    if (ux * ax + uy * ay < 0) ux = -ux, uy = -uy;  // in the direction of travel
-    const double d = passage_approach_;
-    const TPoint2D pre{c.x - ux * d, c.y - uy * d}, post{c.x + ux * d, c.y + uy * d};
-    if (best_gain > clearance(c.x, c.y) && isPassable(pre.x, pre.y) && isPassable(post.x, post.y))
+    const TPoint2D c = pts[best];
+    const TPoint2D a = pts[i > 0 ? i - 1 : i], b = pts[std::min(j, cells.size() - 1)];
+    const double ax = b.x - a.x, ay = b.y - a.y;
+    auto [u, best_gain] = crossingAxis(planner, c);
+    if (u.x * ax + u.y * ay < 0) u.x = -u.x, u.y = -u.y;  // in the direction of travel
+    const double d = approach;
+    const TPoint2D pre{c.x - u.x * d, c.y - u.y * d}, post{c.x + u.x * d, c.y + u.y * d};
+    if (best_gain > planner.clearance(c.x, c.y) && planner.isPassable(pre.x, pre.y) &&
+        planner.isPassable(post.x, post.y))
       passages.push_back({best, pre, c, post});
     i = j;
   }
-  // Corners: from each anchor, the farthest cell still in line of sight;
-  // passages split the path and add their three points.
+  return passages;
+}
+
+// Corners: from each anchor, the farthest cell still in line of sight;
+// passages split the path and add their three points.
+template <class LineOfSight>
+void addWaypoints(const std::vector<Cell>& cells, const std::vector<Passage>& passages,
+                  double approach, const LineOfSight& lineOfSight, Route& r) {
   auto simplify = [&](size_t from, size_t to) {  // cells (from, to], `to` included
     size_t anchor = from;
     while (anchor < to) {
@@ -224,7 +249,7 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
     // Up to the approach point: the last cell before the passage.
     size_t upto = ps.centre;
     while (upto > from &&
-           std::hypot(r.cells[upto].x - ps.mid.x, r.cells[upto].y - ps.mid.y) < passage_approach_)
+           std::hypot(r.cells[upto].x - ps.mid.x, r.cells[upto].y - ps.mid.y) < approach)
       --upto;
     if (upto > from) simplify(from, upto);
     r.waypoints.push_back(ps.before);
@@ -232,11 +257,42 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
     r.waypoints.push_back(ps.after);
     size_t after = ps.centre;
     while (after + 1 < cells.size() &&
-           std::hypot(r.cells[after].x - ps.mid.x, r.cells[after].y - ps.mid.y) < passage_approach_)
+           std::hypot(r.cells[after].x - ps.mid.x, r.cells[after].y - ps.mid.y) < approach)
       ++after;
     from = after;
   }
   if (from + 1 < cells.size()) simplify(from, cells.size() - 1);
+}
+
+}  // namespace
+
+std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) const {
+  const Cell s_cell = startOrGoalCell(map_, nx_, ny_, free_, s, "start");
+  const Cell g_cell = startOrGoalCell(map_, nx_, ny_, free_, g, "goal");
+  // Plain ints, not structured bindings: lambdas below capture them (C++17).
+  const int sx = s_cell.first, sy = s_cell.second, gx = g_cell.first, gy = g_cell.second;
+  // Start and goal may lie closer to a wall than the robot's radius (a robot
+  // parked against a wall): cells within the radius of them that are free
+  // are passable, at a high cost, so the route can leave and reach them.
+  const double near2 = (radius_ / res_ + 1) * (radius_ / res_ + 1);
+  auto passable = [&](int x, int y) {
+    if (cellPassable(x, y)) return true;
+    if (x < 0 || y < 0 || x >= nx_ || y >= ny_) return false;
+    if (!free_[static_cast<size_t>(y) * nx_ + x]) return false;
+    const double ds = double(x - sx) * (x - sx) + double(y - sy) * (y - sy);
+    const double dg = double(x - gx) * (x - gx) + double(y - gy) * (y - gy);
+    return ds <= near2 || dg <= near2;
+  };
+  auto clear = [&](int x, int y) { return cellPassable(x, y); };
+  const SearchGrid grid{nx_, ny_, res_, influence_, weight_, dist_};
+  const auto cells = aStarCells(grid, s_cell, g_cell, passable, clear);
+  if (!cells) return std::nullopt;
+  Route r;
+  for (const auto& [x, y] : *cells) r.cells.push_back({map_.idx2x(x), map_.idx2y(y)});
+  const auto passages = findPassages(*this, *cells, r.cells, dist_, nx_, radius_ + passage_margin_,
+                                     passage_approach_);
+  auto sight = [&](int x0, int y0, int x1, int y1) { return lineOfSight(x0, y0, x1, y1); };
+  addWaypoints(*cells, passages, passage_approach_, sight, r);
   if (r.waypoints.empty()) r.waypoints.push_back(g);
   r.waypoints.back() = g;
   TPoint2D prev = s;

@@ -202,223 +202,334 @@ bool lzfDecompress(const uint8_t* in, size_t n_in, uint8_t* out, size_t n_out) {
   return op == n_out;
 }
 
-}  // namespace
-
-Cloud readPcd(const std::string& path) {
-  const std::string data = slurpFile(path);
+/** A PCD header as read, and where its body starts. */
+struct PcdHeader {
   std::vector<std::string> fields, types;
   std::vector<int> sizes;
   std::vector<size_t> counts;
   long width = -1, height = -1, npoints = -1;
   std::string encoding;
-  size_t pos = 0;
-  int line_no = 0;
-  while (encoding.empty()) {
-    if (pos >= data.size())
-      throw InputError(path + ": PCD header ends before its DATA line (not a PCD file?)");
-    size_t eol = data.find('\n', pos);
-    if (eol == std::string::npos) eol = data.size();
-    std::string line = data.substr(pos, std::min(eol - pos, kMaxHeaderLine));
-    if (eol - pos > kMaxHeaderLine)
-      throw InputError(path + ": PCD header line " + std::to_string(line_no + 1) +
-                       " is longer than " + std::to_string(kMaxHeaderLine) +
-                       " bytes (not a PCD file?)");
-    pos = eol + 1;  // may be data.size() + 1 when the DATA line has no newline
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (binaryBytes(line))
-      throw InputError(path + ": not a PCD file: header line " + std::to_string(line_no) +
-                       " holds binary bytes ('" + printable(line, 24) + "')");
-    auto t = tokens(line);
-    if (t.empty() || t[0][0] == '#') continue;
-    const std::string& k = t[0];
-    const std::string where = "header line " + std::to_string(line_no) + " (" + printable(k) + ")";
-    if (k == "VERSION" || k == "VIEWPOINT") continue;
-    if (k == "FIELDS") {
-      fields.assign(t.begin() + 1, t.end());
-    } else if (k == "SIZE") {
-      for (size_t i = 1; i < t.size(); ++i) {
-        const long s = toLong(path, where, t[i]);
-        if (s != 1 && s != 2 && s != 4 && s != 8)
-          throw InputError(path + ": " + where + ": field size must be 1, 2, 4 or 8");
-        sizes.push_back(static_cast<int>(s));
-      }
-    } else if (k == "TYPE") {
-      for (size_t i = 1; i < t.size(); ++i) {
-        if (t[i] != "F" && t[i] != "I" && t[i] != "U")
-          throw InputError(path + ": " + where + ": type must be F, I or U, not '" +
-                           printable(t[i]) + "'");
-        types.push_back(t[i]);
-      }
-    } else if (k == "COUNT") {
-      for (size_t i = 1; i < t.size(); ++i) {
-        const long cnt = toLong(path, where, t[i]);
-        if (cnt < 1 || static_cast<uint64_t>(cnt) > kMaxFieldCount)
-          throw InputError(path + ": " + where + ": COUNT " + std::to_string(cnt) +
-                           " must be between 1 and " + std::to_string(kMaxFieldCount));
-        counts.push_back(static_cast<size_t>(cnt));
-      }
-    } else if (k == "WIDTH" && t.size() == 2) {
-      width = toLong(path, where, t[1]);
-    } else if (k == "HEIGHT" && t.size() == 2) {
-      height = toLong(path, where, t[1]);
-    } else if (k == "POINTS" && t.size() == 2) {
-      npoints = toLong(path, where, t[1]);
-    } else if (k == "DATA" && t.size() == 2) {
-      encoding = t[1];
-    } else {
-      throw InputError(path + ": malformed PCD " + where + ": '" + printable(line) + "'");
-    }
+  size_t pos = 0;             ///< after the DATA line (may be data.size() + 1)
+  size_t n = 0;               ///< points: WIDTH * HEIGHT
+  int idx[3] = {-1, -1, -1};  ///< fields x, y and z
+};
+
+/** Byte offset of each field inside a record (binary) and token index (ascii). */
+struct PcdLayout {
+  std::vector<size_t> off, tok;
+  size_t rec = 0, ntok = 0;
+};
+
+/** The next PCD header line at `pos` (without '\n' / '\r'), checked for length and binary bytes. */
+std::string nextPcdHeaderLine(const std::string& path, const std::string& data, size_t& pos,
+                              int& line_no) {
+  if (pos >= data.size())
+    throw InputError(path + ": PCD header ends before its DATA line (not a PCD file?)");
+  size_t eol = data.find('\n', pos);
+  if (eol == std::string::npos) eol = data.size();
+  std::string line = data.substr(pos, std::min(eol - pos, kMaxHeaderLine));
+  if (eol - pos > kMaxHeaderLine)
+    throw InputError(path + ": PCD header line " + std::to_string(line_no + 1) +
+                     " is longer than " + std::to_string(kMaxHeaderLine) +
+                     " bytes (not a PCD file?)");
+  pos = eol + 1;  // may be data.size() + 1 when the DATA line has no newline
+  ++line_no;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (binaryBytes(line))
+    throw InputError(path + ": not a PCD file: header line " + std::to_string(line_no) +
+                     " holds binary bytes ('" + printable(line, 24) + "')");
+  return line;
+}
+
+void readPcdSizes(const std::string& path, const std::string& where,
+                  const std::vector<std::string>& t, PcdHeader& h) {
+  for (size_t i = 1; i < t.size(); ++i) {
+    const long s = toLong(path, where, t[i]);
+    if (s != 1 && s != 2 && s != 4 && s != 8)
+      throw InputError(path + ": " + where + ": field size must be 1, 2, 4 or 8");
+    h.sizes.push_back(static_cast<int>(s));
   }
-  if (fields.empty()) throw InputError(path + ": PCD header has no FIELDS line");
-  if (counts.empty()) counts.assign(fields.size(), 1);
-  if (sizes.size() != fields.size() || types.size() != fields.size() ||
-      counts.size() != fields.size())
+}
+
+void readPcdTypes(const std::string& path, const std::string& where,
+                  const std::vector<std::string>& t, PcdHeader& h) {
+  for (size_t i = 1; i < t.size(); ++i) {
+    if (t[i] != "F" && t[i] != "I" && t[i] != "U")
+      throw InputError(path + ": " + where + ": type must be F, I or U, not '" + printable(t[i]) +
+                       "'");
+    h.types.push_back(t[i]);
+  }
+}
+
+void readPcdCounts(const std::string& path, const std::string& where,
+                   const std::vector<std::string>& t, PcdHeader& h) {
+  for (size_t i = 1; i < t.size(); ++i) {
+    const long cnt = toLong(path, where, t[i]);
+    if (cnt < 1 || static_cast<uint64_t>(cnt) > kMaxFieldCount)
+      throw InputError(path + ": " + where + ": COUNT " + std::to_string(cnt) +
+                       " must be between 1 and " + std::to_string(kMaxFieldCount));
+    h.counts.push_back(static_cast<size_t>(cnt));
+  }
+}
+
+/** One header line into `h`. */
+void readPcdHeaderLine(const std::string& path, const std::string& line, int line_no,
+                       PcdHeader& h) {
+  auto t = tokens(line);
+  if (t.empty() || t[0][0] == '#') return;
+  const std::string& k = t[0];
+  const std::string where = "header line " + std::to_string(line_no) + " (" + printable(k) + ")";
+  if (k == "VERSION" || k == "VIEWPOINT") return;
+  if (k == "FIELDS") {
+    h.fields.assign(t.begin() + 1, t.end());
+  } else if (k == "SIZE") {
+    readPcdSizes(path, where, t, h);
+  } else if (k == "TYPE") {
+    readPcdTypes(path, where, t, h);
+  } else if (k == "COUNT") {
+    readPcdCounts(path, where, t, h);
+  } else if (k == "WIDTH" && t.size() == 2) {
+    h.width = toLong(path, where, t[1]);
+  } else if (k == "HEIGHT" && t.size() == 2) {
+    h.height = toLong(path, where, t[1]);
+  } else if (k == "POINTS" && t.size() == 2) {
+    h.npoints = toLong(path, where, t[1]);
+  } else if (k == "DATA" && t.size() == 2) {
+    h.encoding = t[1];
+  } else {
+    throw InputError(path + ": malformed PCD " + where + ": '" + printable(line) + "'");
+  }
+}
+
+/** FIELDS, SIZE, TYPE and COUNT agree. */
+void checkPcdFields(const std::string& path, PcdHeader& h) {
+  if (h.fields.empty()) throw InputError(path + ": PCD header has no FIELDS line");
+  if (h.counts.empty()) h.counts.assign(h.fields.size(), 1);
+  if (h.sizes.size() != h.fields.size() || h.types.size() != h.fields.size() ||
+      h.counts.size() != h.fields.size())
     throw InputError(path + ": PCD header: FIELDS, SIZE, TYPE and COUNT have different lengths");
-  for (size_t i = 0; i < fields.size(); ++i)
-    if (types[i] == "F" && sizes[i] != 4 && sizes[i] != 8)
-      throw InputError(path + ": PCD header: float field '" + printable(fields[i]) + "' has size " +
-                       std::to_string(sizes[i]));
-  if (width < 0) throw InputError(path + ": PCD header has no WIDTH");
-  if (height < 0) height = 1;
-  const auto wh = mulSize(static_cast<size_t>(width), static_cast<size_t>(height));
+  for (size_t i = 0; i < h.fields.size(); ++i)
+    if (h.types[i] == "F" && h.sizes[i] != 4 && h.sizes[i] != 8)
+      throw InputError(path + ": PCD header: float field '" + printable(h.fields[i]) +
+                       "' has size " + std::to_string(h.sizes[i]));
+}
+
+/** WIDTH, HEIGHT and POINTS agree; sets the point count. */
+void checkPcdSize(const std::string& path, PcdHeader& h) {
+  if (h.width < 0) throw InputError(path + ": PCD header has no WIDTH");
+  if (h.height < 0) h.height = 1;
+  const auto wh = mulSize(static_cast<size_t>(h.width), static_cast<size_t>(h.height));
   if (!wh)
-    throw InputError(path + ": PCD header: WIDTH " + std::to_string(width) + " x HEIGHT " +
-                     std::to_string(height) + " overflows");
-  if (npoints < 0) npoints = static_cast<long>(std::min<size_t>(*wh, LONG_MAX));
-  if (static_cast<size_t>(npoints) != *wh)
-    throw InputError(path + ": PCD header: POINTS " + std::to_string(npoints) +
+    throw InputError(path + ": PCD header: WIDTH " + std::to_string(h.width) + " x HEIGHT " +
+                     std::to_string(h.height) + " overflows");
+  if (h.npoints < 0) h.npoints = static_cast<long>(std::min<size_t>(*wh, LONG_MAX));
+  if (static_cast<size_t>(h.npoints) != *wh)
+    throw InputError(path + ": PCD header: POINTS " + std::to_string(h.npoints) +
                      " != WIDTH*HEIGHT " + std::to_string(*wh));
+  h.n = *wh;
+}
+
+void findPcdXyz(const std::string& path, PcdHeader& h) {
   int ix = -1, iy = -1, iz = -1;
-  for (size_t i = 0; i < fields.size(); ++i) {
-    if (fields[i] == "x") ix = static_cast<int>(i);
-    if (fields[i] == "y") iy = static_cast<int>(i);
-    if (fields[i] == "z") iz = static_cast<int>(i);
+  for (size_t i = 0; i < h.fields.size(); ++i) {
+    if (h.fields[i] == "x") ix = static_cast<int>(i);
+    if (h.fields[i] == "y") iy = static_cast<int>(i);
+    if (h.fields[i] == "z") iz = static_cast<int>(i);
   }
   if (ix < 0 || iy < 0 || iz < 0)
     throw InputError(path + ": PCD has no x, y and z fields (FIELDS lists none of them)");
+  h.idx[0] = ix;
+  h.idx[1] = iy;
+  h.idx[2] = iz;
+}
 
-  const size_t n = *wh;
-  // Byte offset of each field inside a record (binary) and token index (ascii).
-  // Every count is <= kMaxFieldCount and every size <= 8, so the sums over at
-  // most (file size) fields cannot overflow.
-  std::vector<size_t> off(fields.size()), tok(fields.size());
-  size_t rec = 0, ntok = 0;
-  for (size_t i = 0; i < fields.size(); ++i) {
-    off[i] = rec;
-    tok[i] = ntok;
-    rec += static_cast<size_t>(sizes[i]) * counts[i];
-    ntok += counts[i];
+/** The header up to its DATA line, checked. */
+PcdHeader readPcdHeader(const std::string& path, const std::string& data) {
+  PcdHeader h;
+  int line_no = 0;
+  while (h.encoding.empty()) {
+    const std::string line = nextPcdHeaderLine(path, data, h.pos, line_no);
+    readPcdHeaderLine(path, line, line_no, h);
   }
-  const size_t body = std::min(pos, data.size());
-  const size_t left = data.size() - body;
-  const int idx[3] = {ix, iy, iz};
+  checkPcdFields(path, h);
+  checkPcdSize(path, h);
+  findPcdXyz(path, h);
+  return h;
+}
+
+// Every count is <= kMaxFieldCount and every size <= 8, so the sums over at
+// most (file size) fields cannot overflow.
+PcdLayout pcdLayout(const PcdHeader& h) {
+  PcdLayout l;
+  l.off.resize(h.fields.size());
+  l.tok.resize(h.fields.size());
+  for (size_t i = 0; i < h.fields.size(); ++i) {
+    l.off[i] = l.rec;
+    l.tok[i] = l.ntok;
+    l.rec += static_cast<size_t>(h.sizes[i]) * h.counts[i];
+    l.ntok += h.counts[i];
+  }
+  return l;
+}
+
+/** A coordinate of an ascii line: a number or a NaN spelling. */
+float asciiCoordinate(const std::string& path, const std::string& where, const std::string& s) {
+  return (s == "nan" || s == "NaN" || s == "-nan") ? kNaN
+                                                   : static_cast<float>(toDouble(path, where, s));
+}
+
+void readPcdAscii(const std::string& path, const std::string& data, size_t body, const PcdHeader& h,
+                  const PcdLayout& l, Cloud& c) {
+  const size_t n = h.n;
+  // A point is ntok numbers, each at least one character and a separator.
+  checkDeclaredPoints(path, "PCD header (ascii)", n, data.size() - body, 2 * l.ntok);
+  c.points.resize(n);
+  std::istringstream ss(data.substr(body));
+  std::string line;
+  size_t k = 0;
+  while (k < n && std::getline(ss, line)) {
+    auto t = tokens(line);
+    if (t.empty()) continue;
+    if (t.size() != l.ntok)
+      throw InputError(path + ": PCD point " + std::to_string(k) + " has " +
+                       std::to_string(t.size()) + " values, the header says " +
+                       std::to_string(l.ntok));
+    float v[3];
+    for (int a = 0; a < 3; ++a)
+      v[a] = asciiCoordinate(path, "point " + std::to_string(k), t[l.tok[h.idx[a]]]);
+    c.points[k++] = {v[0], v[1], v[2]};
+  }
+  if (k < n)
+    throw InputError(path + ": PCD truncated: " + std::to_string(k) + " of " + std::to_string(n) +
+                     " points");
+  while (std::getline(ss, line))
+    if (!tokens(line).empty())
+      throw InputError(path + ": PCD has more points than POINTS " + std::to_string(n));
+}
+
+void readPcdBinary(const std::string& path, const std::string& data, size_t body,
+                   const PcdHeader& h, const PcdLayout& l, Cloud& c) {
+  const size_t n = h.n, left = data.size() - body;
+  const auto need = mulSize(n, l.rec);
+  if (!need || left < *need)
+    throw InputError(path + ": PCD binary data truncated: " + std::to_string(left) + " bytes of " +
+                     (need ? std::to_string(*need) : std::string("(overflow)")) + " for " +
+                     std::to_string(n) + " points");
+  checkDeclaredPoints(path, "PCD header (binary)", n, left, l.rec);
+  c.points.resize(n);
+  const char* base = data.data() + body;
+  for (size_t k = 0; k < n; ++k) {
+    float v[3];
+    for (int a = 0; a < 3; ++a)
+      v[a] = static_cast<float>(
+          readScalar(base + k * l.rec + l.off[h.idx[a]], h.types[h.idx[a]][0], h.sizes[h.idx[a]]));
+    c.points[k] = {v[0], v[1], v[2]};
+  }
+}
+
+/** The LZF-compressed body of a binary_compressed PCD, checked and decompressed. */
+std::vector<uint8_t> pcdDecompressed(const std::string& path, const std::string& data, size_t body,
+                                     const PcdHeader& h, const PcdLayout& l) {
+  const size_t n = h.n, left = data.size() - body;
+  if (left < 8) throw InputError(path + ": PCD binary_compressed data truncated (no size header)");
+  uint32_t comp = 0, uncomp = 0;
+  std::memcpy(&comp, data.data() + body, 4);
+  std::memcpy(&uncomp, data.data() + body + 4, 4);
+  const auto need = mulSize(n, l.rec);
+  if (!need || uncomp != *need)
+    throw InputError(path + ": PCD binary_compressed: uncompressed size " + std::to_string(uncomp) +
+                     " != POINTS*record " +
+                     (need ? std::to_string(*need) : std::string("(overflow)")) + " for " +
+                     std::to_string(n) + " points");
+  if (left - 8 < comp)
+    throw InputError(path + ": PCD binary_compressed data truncated: " + std::to_string(left - 8) +
+                     " bytes of " + std::to_string(comp));
+  // LZF expands at most 264 bytes out of 3 in (a long back reference).
+  if (static_cast<uint64_t>(uncomp) > 88ull * comp + 88)
+    throw InputError(path + ": PCD binary_compressed: " + std::to_string(comp) +
+                     " compressed bytes cannot hold " + std::to_string(uncomp) + " bytes");
+  if (n > kMaxCloudPoints)
+    throw InputError(path + ": PCD header declares " + std::to_string(n) +
+                     " points, more than the limit of " + std::to_string(kMaxCloudPoints));
+  std::vector<uint8_t> raw(uncomp);
+  if (n > 0 && !lzfDecompress(reinterpret_cast<const uint8_t*>(data.data() + body + 8), comp,
+                              raw.data(), raw.size()))
+    throw InputError(path + ": PCD binary_compressed data is corrupt (LZF)");
+  return raw;
+}
+
+void readPcdCompressed(const std::string& path, const std::string& data, size_t body,
+                       const PcdHeader& h, const PcdLayout& l, Cloud& c) {
+  const size_t n = h.n;
+  const std::vector<uint8_t> raw = pcdDecompressed(path, data, body, h, l);
+  c.points.resize(n);
+  // Field-major layout: all values of field 0, then field 1, ...
+  std::vector<size_t> foff(h.fields.size());
+  size_t acc = 0;
+  for (size_t i = 0; i < h.fields.size(); ++i) {
+    foff[i] = acc;
+    acc += n * h.sizes[i] * h.counts[i];  // <= uncomp
+  }
+  for (size_t k = 0; k < n; ++k) {
+    float v[3];
+    for (int a = 0; a < 3; ++a) {
+      const int f = h.idx[a];
+      v[a] = static_cast<float>(readScalar(
+          reinterpret_cast<const char*>(raw.data()) + foff[f] + k * h.sizes[f] * h.counts[f],
+          h.types[f][0], h.sizes[f]));
+    }
+    c.points[k] = {v[0], v[1], v[2]};
+  }
+}
+
+}  // namespace
+
+Cloud readPcd(const std::string& path) {
+  const std::string data = slurpFile(path);
+  const PcdHeader h = readPcdHeader(path, data);
+  const PcdLayout l = pcdLayout(h);
+  const size_t body = std::min(h.pos, data.size());
   Cloud c;
-  c.width = static_cast<size_t>(width);
-  c.height = static_cast<size_t>(height);
-  if (encoding == "ascii") {
-    // A point is ntok numbers, each at least one character and a separator.
-    checkDeclaredPoints(path, "PCD header (ascii)", n, left, 2 * ntok);
-    c.points.resize(n);
-    std::istringstream ss(data.substr(body));
-    std::string line;
-    size_t k = 0;
-    while (k < n && std::getline(ss, line)) {
-      auto t = tokens(line);
-      if (t.empty()) continue;
-      if (t.size() != ntok)
-        throw InputError(path + ": PCD point " + std::to_string(k) + " has " +
-                         std::to_string(t.size()) + " values, the header says " +
-                         std::to_string(ntok));
-      float v[3];
-      for (int a = 0; a < 3; ++a) {
-        const std::string& s = t[tok[idx[a]]];
-        v[a] = (s == "nan" || s == "NaN" || s == "-nan")
-                   ? kNaN
-                   : static_cast<float>(toDouble(path, "point " + std::to_string(k), s));
-      }
-      c.points[k++] = {v[0], v[1], v[2]};
-    }
-    if (k < n)
-      throw InputError(path + ": PCD truncated: " + std::to_string(k) + " of " + std::to_string(n) +
-                       " points");
-    while (std::getline(ss, line))
-      if (!tokens(line).empty())
-        throw InputError(path + ": PCD has more points than POINTS " + std::to_string(n));
-  } else if (encoding == "binary") {
-    const auto need = mulSize(n, rec);
-    if (!need || left < *need)
-      throw InputError(path + ": PCD binary data truncated: " + std::to_string(left) +
-                       " bytes of " + (need ? std::to_string(*need) : std::string("(overflow)")) +
-                       " for " + std::to_string(n) + " points");
-    checkDeclaredPoints(path, "PCD header (binary)", n, left, rec);
-    c.points.resize(n);
-    const char* base = data.data() + body;
-    for (size_t k = 0; k < n; ++k) {
-      float v[3];
-      for (int a = 0; a < 3; ++a)
-        v[a] = static_cast<float>(
-            readScalar(base + k * rec + off[idx[a]], types[idx[a]][0], sizes[idx[a]]));
-      c.points[k] = {v[0], v[1], v[2]};
-    }
-  } else if (encoding == "binary_compressed") {
-    if (left < 8)
-      throw InputError(path + ": PCD binary_compressed data truncated (no size header)");
-    uint32_t comp = 0, uncomp = 0;
-    std::memcpy(&comp, data.data() + body, 4);
-    std::memcpy(&uncomp, data.data() + body + 4, 4);
-    const auto need = mulSize(n, rec);
-    if (!need || uncomp != *need)
-      throw InputError(path + ": PCD binary_compressed: uncompressed size " +
-                       std::to_string(uncomp) + " != POINTS*record " +
-                       (need ? std::to_string(*need) : std::string("(overflow)")) + " for " +
-                       std::to_string(n) + " points");
-    if (left - 8 < comp)
-      throw InputError(path + ": PCD binary_compressed data truncated: " +
-                       std::to_string(left - 8) + " bytes of " + std::to_string(comp));
-    // LZF expands at most 264 bytes out of 3 in (a long back reference).
-    if (static_cast<uint64_t>(uncomp) > 88ull * comp + 88)
-      throw InputError(path + ": PCD binary_compressed: " + std::to_string(comp) +
-                       " compressed bytes cannot hold " + std::to_string(uncomp) + " bytes");
-    if (n > kMaxCloudPoints)
-      throw InputError(path + ": PCD header declares " + std::to_string(n) +
-                       " points, more than the limit of " + std::to_string(kMaxCloudPoints));
-    std::vector<uint8_t> raw(uncomp);
-    if (n > 0 && !lzfDecompress(reinterpret_cast<const uint8_t*>(data.data() + body + 8), comp,
-                                raw.data(), raw.size()))
-      throw InputError(path + ": PCD binary_compressed data is corrupt (LZF)");
-    c.points.resize(n);
-    // Field-major layout: all values of field 0, then field 1, ...
-    std::vector<size_t> foff(fields.size());
-    size_t acc = 0;
-    for (size_t i = 0; i < fields.size(); ++i) {
-      foff[i] = acc;
-      acc += n * sizes[i] * counts[i];  // <= uncomp
-    }
-    for (size_t k = 0; k < n; ++k) {
-      float v[3];
-      for (int a = 0; a < 3; ++a) {
-        const int f = idx[a];
-        v[a] = static_cast<float>(readScalar(
-            reinterpret_cast<const char*>(raw.data()) + foff[f] + k * sizes[f] * counts[f],
-            types[f][0], sizes[f]));
-      }
-      c.points[k] = {v[0], v[1], v[2]};
-    }
-  } else {
-    throw InputError(path + ": PCD DATA '" + printable(encoding) +
+  c.width = static_cast<size_t>(h.width);
+  c.height = static_cast<size_t>(h.height);
+  if (h.encoding == "ascii")
+    readPcdAscii(path, data, body, h, l, c);
+  else if (h.encoding == "binary")
+    readPcdBinary(path, data, body, h, l, c);
+  else if (h.encoding == "binary_compressed")
+    readPcdCompressed(path, data, body, h, l, c);
+  else
+    throw InputError(path + ": PCD DATA '" + printable(h.encoding) +
                      "' is not ascii, binary or binary_compressed");
-  }
   if (c.height <= 1) c.height = 1;
   return c;
 }
 
-Cloud readPly(const std::string& path) {
-  const std::string data = slurpFile(path);
+namespace {
+
+struct PlyProp {
+  std::string name, type;
+  int size;
+};
+
+/** A PLY header as read: the vertex element's properties and where the body starts. */
+struct PlyHeader {
+  std::string format;
+  long nvert = -1;
+  bool in_vertex = false, vertex_seen = false, ended = false, other_elements = false;
+  std::vector<PlyProp> props;
+  int idx[3] = {-1, -1, -1};  ///< properties x, y and z
+};
+
+/** Header lines of a PLY file, numbered for messages. */
+struct PlyLines {
+  const std::string& path;
+  const std::string& data;
   size_t pos = 0;
   int line_no = 0;
-  // Next header line (without '\n' / '\r'); false at the end of the data.
-  auto nextLine = [&](std::string& line) {
+
+  /** Next header line (without '\n' / '\r'); false at the end of the data. */
+  bool next(std::string& line) {
     if (pos >= data.size()) return false;
     size_t eol = data.find('\n', pos);
     if (eol == std::string::npos) eol = data.size();
@@ -434,19 +545,9 @@ Cloud readPly(const std::string& path) {
       throw InputError(path + ": not a PLY file: header line " + std::to_string(line_no) +
                        " holds binary bytes ('" + printable(line, 24) + "')");
     return true;
-  };
-  std::string line;
-  if (!nextLine(line) || tokens(line) != std::vector<std::string>{"ply"})
-    throw InputError(path + ": not a PLY file (first line is not 'ply')");
-  std::string format;
-  long nvert = -1;
-  bool in_vertex = false, vertex_seen = false, ended = false, other_elements = false;
-  struct Prop {
-    std::string name, type;
-    int size;
-  };
-  std::vector<Prop> props;
-  auto typeSize = [&](const std::string& t) -> int {
+  }
+
+  int typeSize(const std::string& t) const {
     if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
     if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
     if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" ||
@@ -455,121 +556,161 @@ Cloud readPly(const std::string& path) {
     if (t == "double" || t == "float64") return 8;
     throw InputError(path + ": PLY header line " + std::to_string(line_no) +
                      ": unknown property type '" + printable(t) + "'");
-  };
-  while (nextLine(line)) {
-    auto t = tokens(line);
-    if (t.empty() || t[0] == "comment" || t[0] == "obj_info") continue;
-    const std::string where = "PLY header line " + std::to_string(line_no);
-    if (t[0] == "format" && t.size() == 3) {
-      format = t[1];
-    } else if (t[0] == "element" && t.size() == 3) {
-      if (t[1] == "vertex") {
-        if (vertex_seen) throw InputError(path + ": " + where + ": a second vertex element");
-        nvert = toLong(path, where, t[2]);
-        in_vertex = vertex_seen = true;
-      } else {
-        if (!vertex_seen)
-          throw InputError(path + ": " + where + ": element '" + printable(t[1]) +
-                           "' before the vertex element is not supported");
-        in_vertex = false;
-        other_elements = true;
-      }
-    } else if (t[0] == "property" && t.size() >= 3) {
-      if (in_vertex) {
-        if (t[1] == "list")
-          throw InputError(path + ": " + where + ": list property in the vertex element");
-        props.push_back({t[2], t[1], typeSize(t[1])});
-      }
-    } else if (t[0] == "end_header") {
-      ended = true;
-      break;
-    } else {
-      throw InputError(path + ": malformed " + where + ": '" + printable(line) + "'");
-    }
   }
-  if (!ended) throw InputError(path + ": PLY header has no end_header line");
-  if (!vertex_seen) throw InputError(path + ": PLY header has no vertex element");
+};
+
+void readPlyElement(const std::string& path, const std::string& where,
+                    const std::vector<std::string>& t, PlyHeader& h) {
+  if (t[1] == "vertex") {
+    if (h.vertex_seen) throw InputError(path + ": " + where + ": a second vertex element");
+    h.nvert = toLong(path, where, t[2]);
+    h.in_vertex = h.vertex_seen = true;
+  } else {
+    if (!h.vertex_seen)
+      throw InputError(path + ": " + where + ": element '" + printable(t[1]) +
+                       "' before the vertex element is not supported");
+    h.in_vertex = false;
+    h.other_elements = true;
+  }
+}
+
+/** One header line into `h`; false after end_header. */
+bool readPlyHeaderLine(const PlyLines& in, const std::string& line, PlyHeader& h) {
+  const std::string& path = in.path;
+  auto t = tokens(line);
+  if (t.empty() || t[0] == "comment" || t[0] == "obj_info") return true;
+  const std::string where = "PLY header line " + std::to_string(in.line_no);
+  if (t[0] == "format" && t.size() == 3) {
+    h.format = t[1];
+  } else if (t[0] == "element" && t.size() == 3) {
+    readPlyElement(path, where, t, h);
+  } else if (t[0] == "property" && t.size() >= 3) {
+    if (h.in_vertex) {
+      if (t[1] == "list")
+        throw InputError(path + ": " + where + ": list property in the vertex element");
+      h.props.push_back({t[2], t[1], in.typeSize(t[1])});
+    }
+  } else if (t[0] == "end_header") {
+    h.ended = true;
+    return false;
+  } else {
+    throw InputError(path + ": malformed " + where + ": '" + printable(line) + "'");
+  }
+  return true;
+}
+
+/** The header up to end_header, checked; `in.pos` is then where the body starts. */
+PlyHeader readPlyHeader(PlyLines& in) {
+  const std::string& path = in.path;
+  std::string line;
+  if (!in.next(line) || tokens(line) != std::vector<std::string>{"ply"})
+    throw InputError(path + ": not a PLY file (first line is not 'ply')");
+  PlyHeader h;
+  while (in.next(line))
+    if (!readPlyHeaderLine(in, line, h)) break;
+  if (!h.ended) throw InputError(path + ": PLY header has no end_header line");
+  if (!h.vertex_seen) throw InputError(path + ": PLY header has no vertex element");
   int ix = -1, iy = -1, iz = -1;
-  for (size_t i = 0; i < props.size(); ++i) {
-    if (props[i].name == "x") ix = static_cast<int>(i);
-    if (props[i].name == "y") iy = static_cast<int>(i);
-    if (props[i].name == "z") iz = static_cast<int>(i);
+  for (size_t i = 0; i < h.props.size(); ++i) {
+    if (h.props[i].name == "x") ix = static_cast<int>(i);
+    if (h.props[i].name == "y") iy = static_cast<int>(i);
+    if (h.props[i].name == "z") iz = static_cast<int>(i);
   }
   if (ix < 0 || iy < 0 || iz < 0)
     throw InputError(path + ": PLY vertex element has no x, y and z properties");
-  const size_t n = static_cast<size_t>(nvert);
-  const size_t body = pos;  // <= data.size(), also when end_header has no newline
-  const size_t left = data.size() - body;
-  Cloud c;
-  c.width = n;
-  c.height = 1;
-  const int idx[3] = {ix, iy, iz};
-  if (format == "ascii") {
-    checkDeclaredPoints(path, "PLY header (ascii vertex element)", n, left, 2 * props.size());
-    c.points.resize(n);
-    std::istringstream hs(data.substr(body));
-    size_t k = 0;
-    while (k < n && std::getline(hs, line)) {
-      auto t = tokens(line);
-      if (t.empty()) continue;
-      if (t.size() < props.size())
-        throw InputError(path + ": PLY vertex " + std::to_string(k) + " has " +
-                         std::to_string(t.size()) + " values, the header says " +
-                         std::to_string(props.size()));
-      float v[3];
-      for (int a = 0; a < 3; ++a) {
-        const std::string& s = t[idx[a]];
-        v[a] = (s == "nan" || s == "NaN" || s == "-nan")
-                   ? kNaN
-                   : static_cast<float>(toDouble(path, "vertex " + std::to_string(k), s));
-      }
-      c.points[k++] = {v[0], v[1], v[2]};
-    }
-    if (k < n)
-      throw InputError(path + ": PLY truncated: " + std::to_string(k) + " of " + std::to_string(n) +
-                       " vertices");
-    if (!other_elements)  // nothing may follow the vertices
-      while (std::getline(hs, line))
-        if (!tokens(line).empty())
-          throw InputError(path + ": PLY has more vertex lines than 'element vertex " +
-                           std::to_string(n) + "'");
-  } else if (format == "binary_little_endian") {
-    std::vector<size_t> off(props.size());
-    size_t rec = 0;
-    for (size_t i = 0; i < props.size(); ++i) {
-      off[i] = rec;
-      rec += props[i].size;
-    }
-    const auto need = mulSize(n, rec);
-    if (!need || left < *need)
-      throw InputError(path + ": PLY binary data truncated: " + std::to_string(left) +
-                       " bytes of " + (need ? std::to_string(*need) : std::string("(overflow)")) +
-                       " for " + std::to_string(n) + " vertices");
-    if (!other_elements && left - *need >= rec)
-      throw InputError(path + ": PLY has " + std::to_string(left - *need) + " bytes after its " +
-                       std::to_string(n) +
-                       " vertices (more vertices than 'element vertex' declares?)");
-    checkDeclaredPoints(path, "PLY header (binary vertex element)", n, left, rec);
-    c.points.resize(n);
-    const char* b = data.data() + body;
-    for (size_t k = 0; k < n; ++k) {
-      float v[3];
-      for (int a = 0; a < 3; ++a) {
-        const Prop& p = props[idx[a]];
-        const char kind =
-            (p.type == "float" || p.type == "double" || p.type == "float32" || p.type == "float64")
-                ? 'F'
-                : (p.type[0] == 'u' ? 'U' : 'I');
-        v[a] = static_cast<float>(readScalar(b + k * rec + off[idx[a]], kind, p.size));
-      }
-      c.points[k] = {v[0], v[1], v[2]};
-    }
-  } else if (format.empty()) {
-    throw InputError(path + ": PLY header has no format line");
-  } else {
-    throw InputError(path + ": PLY format '" + printable(format) +
-                     "' is not supported (ascii or binary_little_endian)");
+  h.idx[0] = ix;
+  h.idx[1] = iy;
+  h.idx[2] = iz;
+  return h;
+}
+
+void readPlyAscii(const std::string& path, const std::string& data, size_t body, const PlyHeader& h,
+                  Cloud& c) {
+  const size_t n = c.width;
+  checkDeclaredPoints(path, "PLY header (ascii vertex element)", n, data.size() - body,
+                      2 * h.props.size());
+  c.points.resize(n);
+  std::istringstream hs(data.substr(body));
+  std::string line;
+  size_t k = 0;
+  while (k < n && std::getline(hs, line)) {
+    auto t = tokens(line);
+    if (t.empty()) continue;
+    if (t.size() < h.props.size())
+      throw InputError(path + ": PLY vertex " + std::to_string(k) + " has " +
+                       std::to_string(t.size()) + " values, the header says " +
+                       std::to_string(h.props.size()));
+    float v[3];
+    for (int a = 0; a < 3; ++a)
+      v[a] = asciiCoordinate(path, "vertex " + std::to_string(k), t[h.idx[a]]);
+    c.points[k++] = {v[0], v[1], v[2]};
   }
+  if (k < n)
+    throw InputError(path + ": PLY truncated: " + std::to_string(k) + " of " + std::to_string(n) +
+                     " vertices");
+  if (!h.other_elements)  // nothing may follow the vertices
+    while (std::getline(hs, line))
+      if (!tokens(line).empty())
+        throw InputError(path + ": PLY has more vertex lines than 'element vertex " +
+                         std::to_string(n) + "'");
+}
+
+char plyKind(const std::string& type) {
+  return (type == "float" || type == "double" || type == "float32" || type == "float64")
+             ? 'F'
+             : (type[0] == 'u' ? 'U' : 'I');
+}
+
+void readPlyBinary(const std::string& path, const std::string& data, size_t body,
+                   const PlyHeader& h, Cloud& c) {
+  const size_t n = c.width, left = data.size() - body;
+  std::vector<size_t> off(h.props.size());
+  size_t rec = 0;
+  for (size_t i = 0; i < h.props.size(); ++i) {
+    off[i] = rec;
+    rec += h.props[i].size;
+  }
+  const auto need = mulSize(n, rec);
+  if (!need || left < *need)
+    throw InputError(path + ": PLY binary data truncated: " + std::to_string(left) + " bytes of " +
+                     (need ? std::to_string(*need) : std::string("(overflow)")) + " for " +
+                     std::to_string(n) + " vertices");
+  if (!h.other_elements && left - *need >= rec)
+    throw InputError(path + ": PLY has " + std::to_string(left - *need) + " bytes after its " +
+                     std::to_string(n) +
+                     " vertices (more vertices than 'element vertex' declares?)");
+  checkDeclaredPoints(path, "PLY header (binary vertex element)", n, left, rec);
+  c.points.resize(n);
+  const char* b = data.data() + body;
+  for (size_t k = 0; k < n; ++k) {
+    float v[3];
+    for (int a = 0; a < 3; ++a) {
+      const PlyProp& p = h.props[h.idx[a]];
+      v[a] = static_cast<float>(readScalar(b + k * rec + off[h.idx[a]], plyKind(p.type), p.size));
+    }
+    c.points[k] = {v[0], v[1], v[2]};
+  }
+}
+
+}  // namespace
+
+Cloud readPly(const std::string& path) {
+  const std::string data = slurpFile(path);
+  PlyLines in{path, data};
+  const PlyHeader h = readPlyHeader(in);
+  const size_t body = in.pos;  // <= data.size(), also when end_header has no newline
+  Cloud c;
+  c.width = static_cast<size_t>(h.nvert);
+  c.height = 1;
+  if (h.format == "ascii")
+    readPlyAscii(path, data, body, h, c);
+  else if (h.format == "binary_little_endian")
+    readPlyBinary(path, data, body, h, c);
+  else if (h.format.empty())
+    throw InputError(path + ": PLY header has no format line");
+  else
+    throw InputError(path + ": PLY format '" + printable(h.format) +
+                     "' is not supported (ascii or binary_little_endian)");
   return c;
 }
 

@@ -219,6 +219,222 @@ size_t validRanges(const mrpt::obs::CObservation2DRangeScan& s) {
   return n;
 }
 
+void writeFrameGround(JsonWriter& j, const FrameResult& r, Method method) {
+  j.key("ground_plane");
+  writePlane(j, r.plane);
+  j.key("plane_source").value(r.plane_source);
+  if (r.plane) j.key("plane_tilt_deg").value(std::acos(std::min(1.0, r.plane->c)) * 180 / M_PI);
+  j.key("plane_note").value(r.plane_note);
+  if (method == Method::RrtGpd) {
+    j.key("plane_prior_offset_m").value(r.ground.plane ? r.ground.prior_offset : 0.0);
+    j.key("rrt_trees").value(r.ground.trees_grown);
+    j.key("rrt_trees_refused").value(r.ground.trees_refused);
+  }
+  j.key("rrt_nodes").value(static_cast<uint64_t>(r.ground.nodes.size()));
+  j.key("ransac_inliers").value(static_cast<uint64_t>(r.ground.ransac_inliers));
+}
+
+void writeFrameCells(JsonWriter& j, const FrameResult& r) {
+  j.key("voxels").beginObject().key("total").value(static_cast<uint64_t>(r.ism.voxels));
+  j.key("ground").value(static_cast<uint64_t>(r.ism.ground_voxels));
+  j.key("obstacle").value(static_cast<uint64_t>(r.ism.obstacle_voxels));
+  j.key("rescued").value(static_cast<uint64_t>(r.ism.rescued_voxels)).endObject();
+  j.key("cells").beginObject().key("occupied").value(static_cast<uint64_t>(r.counts.occupied));
+  j.key("free").value(static_cast<uint64_t>(r.counts.free));
+  j.key("unknown").value(static_cast<uint64_t>(r.counts.unknown)).endObject();
+}
+
+void writeFrameScans(JsonWriter& j, const FrameResult& r) {
+  j.key("scans").beginObject();
+  if (r.kos) j.key("kos_valid").value(static_cast<uint64_t>(validRanges(*r.kos)));
+  if (r.maxrule) j.key("maxrule_valid").value(static_cast<uint64_t>(validRanges(*r.maxrule)));
+  if (r.mrpt_scan)
+    j.key("mrpt_2dscan_valid").value(static_cast<uint64_t>(validRanges(*r.mrpt_scan)));
+  if (r.fspf) {
+    j.key("fspf_planes")
+        .value(r.fspf->planes)
+        .key("fspf_planes_dropped")
+        .value(r.fspf->planes_dropped);
+    j.key("fspf_points").value(static_cast<uint64_t>(r.fspf->filtered.points.size()));
+  }
+  j.endObject();
+}
+
+/** The perceive job: frames through the pipeline into PNGs, gridmaps,
+ *  virtual scans and summary.json. */
+class PerceiveJob {
+ public:
+  explicit PerceiveJob(const PerceiveOptions& o)
+      : o_(o),
+        pipe_(o.params, o.method),
+        scans_path_((std::filesystem::path(o.out_dir) / "virtual_scans.rawlog").string()) {
+    j_.beginObject().key("method").value(methodName(o.method));
+    j_.key("input").value(o.rawlog.empty() ? o.cloud : o.rawlog);
+    j_.key("grid").beginObject().key("cells").value(o.params.grid_cells);
+    j_.key("resolution").value(o.params.resolution).endObject();
+    j_.key("frames").beginArray();
+    if (!scans_out_.open(scans_path_)) throw std::runtime_error(scans_path_ + ": cannot write");
+  }
+
+  void perceiveCloudFile() {
+    if (!o_.sensor_pose)
+      throw InputError(o_.cloud +
+                       ": a single cloud needs the sensor pose: --sensor-pose "
+                       "x,y,z,yaw,pitch,roll or a depth-camera sensor in the profile");
+    Cloud cam = readCloudFile(o_.cloud);
+    res_.warnings = checkCloudContent(o_.cloud, cam);
+    Cloud robot = toRobotFrame(cam, *o_.sensor_pose, true);
+    const Point3f origin{static_cast<float>(o_.sensor_pose->x()),
+                         static_cast<float>(o_.sensor_pose->y()),
+                         static_cast<float>(o_.sensor_pose->z())};
+    if (o_.method == Method::Mrpt2DScan)
+      throw InputError(o_.cloud +
+                       ": --method mrpt-2dscan needs depth images (CObservation3DRangeScan in "
+                       "a rawlog), not a point cloud file");
+    handleFrame(robot, origin, nullptr, mrpt::poses::CPose2D(), "cloud");
+  }
+
+  void perceiveRawlog() {
+    io::RawlogReader reader(o_.rawlog);
+    Progress prog("perceive", reader.fileSize(), false);
+    prog.setEnabled(prog.enabled() && o_.progress);
+    mrpt::poses::CPose2D odo;
+    io::RawlogEntry e;
+    while ((o_.max_frames == 0 || res_.frames < o_.max_frames) && reader.next(e)) {
+      if (e.odometry_increment) odo = odo + *e.odometry_increment;
+      for (const auto& obs : e.observations()) {
+        if (!obs || (!o_.params.sensor.empty() && obs->sensorLabel != o_.params.sensor)) continue;
+        perceiveObservation(obs, odo);
+        if (o_.max_frames && res_.frames >= o_.max_frames) break;
+      }
+      prog.update(reader.filePosition(), reader.entriesRead());
+    }
+    prog.finish();
+    if (res_.frames == 0)
+      throw InputError(o_.rawlog +
+                       ": no 3D observation (CObservation3DRangeScan, "
+                       "CObservationPointCloud, CObservationVelodyneScan)" +
+                       (o_.params.sensor.empty() ? std::string()
+                                                 : " with sensorLabel '" + o_.params.sensor + "'") +
+                       (o_.method == Method::Mrpt2DScan ? " with a depth image" : ""));
+  }
+
+  PerceiveResult finish() {
+    j_.endArray();
+    addWarnings();
+    j_.key("frame_count").value(static_cast<uint64_t>(res_.frames));
+    j_.key("frames_without_points").value(static_cast<uint64_t>(frames_without_points_));
+    j_.key("warnings").beginArray();
+    for (const auto& w : res_.warnings) j_.value(w);
+    j_.endArray();
+    j_.key("mean_total_ms").value(res_.frames ? total_ms_ / res_.frames : 0.0);
+    j_.endObject();
+    scans_out_.close();
+    res_.outputs.push_back(scans_path_);
+    const std::string sp = (std::filesystem::path(o_.out_dir) / "summary.json").string();
+    std::ofstream sf(sp);
+    sf << j_.str() << "\n";
+    if (!sf) throw std::runtime_error(sp + ": cannot write");
+    res_.outputs.push_back(sp);
+    return res_;
+  }
+
+ private:
+  /** One observation of the rawlog, in its sensor's pose (the given one, the
+   *  profile's or its own). */
+  void perceiveObservation(const mrpt::obs::CObservation::Ptr& obs,
+                           const mrpt::poses::CPose2D& odo) {
+    std::optional<mrpt::poses::CPose3D> pose = o_.sensor_pose;
+    if (!pose)
+      for (const auto& [label, pp] : o_.profile_poses)
+        if (label == obs->sensorLabel) pose = pp;
+    auto cloud = cloudFromObservation(*obs, pose);
+    if (!cloud) return;
+    mrpt::poses::CPose3D used = pose ? *pose : mrpt::poses::CPose3D();
+    if (!pose) obs->getSensorPose(used);
+    auto* depth = dynamic_cast<mrpt::obs::CObservation3DRangeScan*>(obs.get());
+    if (depth && pose) depth->sensorPose = *pose;
+    if (o_.method == Method::Mrpt2DScan && !depth) return;
+    handleFrame(
+        *cloud,
+        {static_cast<float>(used.x()), static_cast<float>(used.y()), static_cast<float>(used.z())},
+        depth, odo, obs->sensorLabel);
+  }
+
+  void handleFrame(Cloud& cloud, const Point3f& origin, mrpt::obs::CObservation3DRangeScan* obs,
+                   const mrpt::poses::CPose2D& odo, const std::string& label) {
+    FrameInput in;
+    in.cloud = &cloud;
+    in.sensor_origin = origin;
+    in.depth_obs = obs;
+    in.odometry = odo;
+    const FrameResult r = pipe_.process(in, true);
+    const size_t f = res_.frames++;
+    if (r.points_valid == 0) ++frames_without_points_;
+    if (r.plane_source == "nominal" && r.ground.trees_refused > 0) ++frames_refused_;
+    if (!r.plane_note.empty() && r.plane_source != "nominal") ++frames_far_plane_;
+    char name[64];
+    std::snprintf(name, sizeof(name), "frame_%04zu", f);
+    const std::filesystem::path base = std::filesystem::path(o_.out_dir) / name;
+    const std::string png = base.string() + ".png", gm = base.string() + ".gridmap.gz";
+    if (!pipe_.render(r).saveToFile(png)) throw std::runtime_error(png + ": cannot write");
+    io::saveGridMap(pipe_.grid().toMrpt(), gm);
+    res_.outputs.push_back(png);
+    res_.outputs.push_back(gm);
+    for (auto* s : {&r.kos, &r.maxrule, &r.mrpt_scan})
+      if (*s) scans_arch_ << **s;
+    total_ms_ += r.timing("total");
+    writeFrameJson(r, f, label, png, gm);
+  }
+
+  void writeFrameJson(const FrameResult& r, size_t f, const std::string& label,
+                      const std::string& png, const std::string& gm) {
+    namespace fs = std::filesystem;
+    j_.beginObject().key("index").value(static_cast<uint64_t>(f)).key("sensor").value(label);
+    j_.key("points").value(static_cast<uint64_t>(r.points_total));
+    j_.key("valid_points").value(static_cast<uint64_t>(r.points_valid));
+    writeFrameGround(j_, r, o_.method);
+    writeFrameCells(j_, r);
+    writeFrameScans(j_, r);
+    j_.key("timing_ms").beginObject();
+    for (const auto& [k, v] : r.timing_ms) j_.key(k).value(v);
+    j_.endObject().key("png").value(fs::path(png).filename().string());
+    j_.key("gridmap").value(fs::path(gm).filename().string()).endObject();
+  }
+
+  void addWarnings() {
+    if (frames_without_points_ > 0)
+      res_.warnings.push_back(
+          (o_.rawlog.empty() ? o_.cloud : o_.rawlog) + ": " +
+          std::to_string(frames_without_points_) + " of " + std::to_string(res_.frames) +
+          " frame(s) had no usable point (none valid, or none in the local grid, z " +
+          std::to_string(o_.params.z_min) + " to " + std::to_string(o_.params.z_max) +
+          " m): no information, the cells stay unknown");
+    const std::string input = o_.rawlog.empty() ? o_.cloud : o_.rawlog;
+    if (frames_refused_ > 0)
+      res_.warnings.push_back(input + ": " + std::to_string(frames_refused_) + " of " +
+                              std::to_string(res_.frames) +
+                              " frame(s): every RRT tree was smaller than min_tree_nodes; the "
+                              "nominal floor z = 0 was used (see plane_note)");
+    if (frames_far_plane_ > 0)
+      res_.warnings.push_back(input + ": " + std::to_string(frames_far_plane_) + " of " +
+                              std::to_string(res_.frames) +
+                              " frame(s): ground plane farther than prior_height_tolerance from "
+                              "the robot's floor z = 0 (see plane_note; check the sensor pose)");
+  }
+
+  const PerceiveOptions& o_;
+  PerceiveResult res_;
+  Pipeline pipe_;
+  JsonWriter j_;
+  mrpt::io::CFileGZOutputStream scans_out_;
+  const std::string scans_path_;
+  mrpt::serialization::CArchiveStreamBase<mrpt::io::CFileGZOutputStream> scans_arch_{scans_out_};
+  double total_ms_ = 0;
+  size_t frames_without_points_ = 0;  // no valid point inside the grid's z band
+  size_t frames_far_plane_ = 0, frames_refused_ = 0;
+};
+
 }  // namespace
 
 PerceiveResult runPerceive(const PerceiveOptions& o) {
@@ -229,175 +445,12 @@ PerceiveResult runPerceive(const PerceiveOptions& o) {
   fs::create_directories(o.out_dir, ec);
   if (ec || !fs::is_directory(o.out_dir))
     throw InputError(o.out_dir + ": cannot create the output folder");
-
-  PerceiveResult res;
-  Pipeline pipe(o.params, o.method);
-  JsonWriter j;
-  j.beginObject().key("method").value(methodName(o.method));
-  j.key("input").value(o.rawlog.empty() ? o.cloud : o.rawlog);
-  j.key("grid").beginObject().key("cells").value(o.params.grid_cells);
-  j.key("resolution").value(o.params.resolution).endObject();
-  j.key("frames").beginArray();
-  mrpt::io::CFileGZOutputStream scans_out;
-  const std::string scans_path = (fs::path(o.out_dir) / "virtual_scans.rawlog").string();
-  if (!scans_out.open(scans_path)) throw std::runtime_error(scans_path + ": cannot write");
-  auto scans_arch = mrpt::serialization::archiveFrom(scans_out);
-  double total_ms = 0;
-  size_t frames_without_points = 0;  // no valid point inside the grid's z band
-  size_t frames_far_plane = 0, frames_refused = 0;
-
-  auto handle = [&](Cloud& cloud, const Point3f& origin, mrpt::obs::CObservation3DRangeScan* obs,
-                    const mrpt::poses::CPose2D& odo, const std::string& label) {
-    FrameInput in;
-    in.cloud = &cloud;
-    in.sensor_origin = origin;
-    in.depth_obs = obs;
-    in.odometry = odo;
-    const FrameResult r = pipe.process(in, true);
-    const size_t f = res.frames++;
-    if (r.points_valid == 0) ++frames_without_points;
-    if (r.plane_source == "nominal" && r.ground.trees_refused > 0) ++frames_refused;
-    if (!r.plane_note.empty() && r.plane_source != "nominal") ++frames_far_plane;
-    char name[64];
-    std::snprintf(name, sizeof(name), "frame_%04zu", f);
-    const fs::path base = fs::path(o.out_dir) / name;
-    const std::string png = base.string() + ".png", gm = base.string() + ".gridmap.gz";
-    if (!pipe.render(r).saveToFile(png)) throw std::runtime_error(png + ": cannot write");
-    io::saveGridMap(pipe.grid().toMrpt(), gm);
-    res.outputs.push_back(png);
-    res.outputs.push_back(gm);
-    for (auto* s : {&r.kos, &r.maxrule, &r.mrpt_scan})
-      if (*s) scans_arch << **s;
-    total_ms += r.timing("total");
-    j.beginObject().key("index").value(static_cast<uint64_t>(f)).key("sensor").value(label);
-    j.key("points").value(static_cast<uint64_t>(r.points_total));
-    j.key("valid_points").value(static_cast<uint64_t>(r.points_valid));
-    j.key("ground_plane");
-    writePlane(j, r.plane);
-    j.key("plane_source").value(r.plane_source);
-    if (r.plane) j.key("plane_tilt_deg").value(std::acos(std::min(1.0, r.plane->c)) * 180 / M_PI);
-    j.key("plane_note").value(r.plane_note);
-    if (o.method == Method::RrtGpd) {
-      j.key("plane_prior_offset_m").value(r.ground.plane ? r.ground.prior_offset : 0.0);
-      j.key("rrt_trees").value(r.ground.trees_grown);
-      j.key("rrt_trees_refused").value(r.ground.trees_refused);
-    }
-    j.key("rrt_nodes").value(static_cast<uint64_t>(r.ground.nodes.size()));
-    j.key("ransac_inliers").value(static_cast<uint64_t>(r.ground.ransac_inliers));
-    j.key("voxels").beginObject().key("total").value(static_cast<uint64_t>(r.ism.voxels));
-    j.key("ground").value(static_cast<uint64_t>(r.ism.ground_voxels));
-    j.key("obstacle").value(static_cast<uint64_t>(r.ism.obstacle_voxels));
-    j.key("rescued").value(static_cast<uint64_t>(r.ism.rescued_voxels)).endObject();
-    j.key("cells").beginObject().key("occupied").value(static_cast<uint64_t>(r.counts.occupied));
-    j.key("free").value(static_cast<uint64_t>(r.counts.free));
-    j.key("unknown").value(static_cast<uint64_t>(r.counts.unknown)).endObject();
-    j.key("scans").beginObject();
-    if (r.kos) j.key("kos_valid").value(static_cast<uint64_t>(validRanges(*r.kos)));
-    if (r.maxrule) j.key("maxrule_valid").value(static_cast<uint64_t>(validRanges(*r.maxrule)));
-    if (r.mrpt_scan)
-      j.key("mrpt_2dscan_valid").value(static_cast<uint64_t>(validRanges(*r.mrpt_scan)));
-    if (r.fspf) {
-      j.key("fspf_planes")
-          .value(r.fspf->planes)
-          .key("fspf_planes_dropped")
-          .value(r.fspf->planes_dropped);
-      j.key("fspf_points").value(static_cast<uint64_t>(r.fspf->filtered.points.size()));
-    }
-    j.endObject();
-    j.key("timing_ms").beginObject();
-    for (const auto& [k, v] : r.timing_ms) j.key(k).value(v);
-    j.endObject().key("png").value(fs::path(png).filename().string());
-    j.key("gridmap").value(fs::path(gm).filename().string()).endObject();
-  };
-
-  if (!o.cloud.empty()) {
-    if (!o.sensor_pose)
-      throw InputError(o.cloud +
-                       ": a single cloud needs the sensor pose: --sensor-pose "
-                       "x,y,z,yaw,pitch,roll or a depth-camera sensor in the profile");
-    Cloud cam = readCloudFile(o.cloud);
-    res.warnings = checkCloudContent(o.cloud, cam);
-    Cloud robot = toRobotFrame(cam, *o.sensor_pose, true);
-    const Point3f origin{static_cast<float>(o.sensor_pose->x()),
-                         static_cast<float>(o.sensor_pose->y()),
-                         static_cast<float>(o.sensor_pose->z())};
-    if (o.method == Method::Mrpt2DScan)
-      throw InputError(o.cloud +
-                       ": --method mrpt-2dscan needs depth images (CObservation3DRangeScan in "
-                       "a rawlog), not a point cloud file");
-    handle(robot, origin, nullptr, mrpt::poses::CPose2D(), "cloud");
-  } else {
-    io::RawlogReader reader(o.rawlog);
-    Progress prog("perceive", reader.fileSize(), false);
-    prog.setEnabled(prog.enabled() && o.progress);
-    mrpt::poses::CPose2D odo;
-    io::RawlogEntry e;
-    while ((o.max_frames == 0 || res.frames < o.max_frames) && reader.next(e)) {
-      if (e.odometry_increment) odo = odo + *e.odometry_increment;
-      for (const auto& obs : e.observations()) {
-        if (!obs || (!o.params.sensor.empty() && obs->sensorLabel != o.params.sensor)) continue;
-        std::optional<mrpt::poses::CPose3D> pose = o.sensor_pose;
-        if (!pose)
-          for (const auto& [label, pp] : o.profile_poses)
-            if (label == obs->sensorLabel) pose = pp;
-        auto cloud = cloudFromObservation(*obs, pose);
-        if (!cloud) continue;
-        mrpt::poses::CPose3D used = pose ? *pose : mrpt::poses::CPose3D();
-        if (!pose) obs->getSensorPose(used);
-        auto* depth = dynamic_cast<mrpt::obs::CObservation3DRangeScan*>(obs.get());
-        if (depth && pose) depth->sensorPose = *pose;
-        if (o.method == Method::Mrpt2DScan && !depth) continue;
-        handle(*cloud,
-               {static_cast<float>(used.x()), static_cast<float>(used.y()),
-                static_cast<float>(used.z())},
-               depth, odo, obs->sensorLabel);
-        if (o.max_frames && res.frames >= o.max_frames) break;
-      }
-      prog.update(reader.filePosition(), reader.entriesRead());
-    }
-    prog.finish();
-    if (res.frames == 0)
-      throw InputError(o.rawlog +
-                       ": no 3D observation (CObservation3DRangeScan, "
-                       "CObservationPointCloud, CObservationVelodyneScan)" +
-                       (o.params.sensor.empty() ? std::string()
-                                                : " with sensorLabel '" + o.params.sensor + "'") +
-                       (o.method == Method::Mrpt2DScan ? " with a depth image" : ""));
-  }
-  j.endArray();
-  if (frames_without_points > 0)
-    res.warnings.push_back(
-        (o.rawlog.empty() ? o.cloud : o.rawlog) + ": " + std::to_string(frames_without_points) +
-        " of " + std::to_string(res.frames) +
-        " frame(s) had no usable point (none valid, or none in the local grid, z " +
-        std::to_string(o.params.z_min) + " to " + std::to_string(o.params.z_max) +
-        " m): no information, the cells stay unknown");
-  const std::string input = o.rawlog.empty() ? o.cloud : o.rawlog;
-  if (frames_refused > 0)
-    res.warnings.push_back(input + ": " + std::to_string(frames_refused) + " of " +
-                           std::to_string(res.frames) +
-                           " frame(s): every RRT tree was smaller than min_tree_nodes; the "
-                           "nominal floor z = 0 was used (see plane_note)");
-  if (frames_far_plane > 0)
-    res.warnings.push_back(input + ": " + std::to_string(frames_far_plane) + " of " +
-                           std::to_string(res.frames) +
-                           " frame(s): ground plane farther than prior_height_tolerance from "
-                           "the robot's floor z = 0 (see plane_note; check the sensor pose)");
-  j.key("frame_count").value(static_cast<uint64_t>(res.frames));
-  j.key("frames_without_points").value(static_cast<uint64_t>(frames_without_points));
-  j.key("warnings").beginArray();
-  for (const auto& w : res.warnings) j.value(w);
-  j.endArray();
-  j.key("mean_total_ms").value(res.frames ? total_ms / res.frames : 0.0);
-  j.endObject();
-  scans_out.close();
-  res.outputs.push_back(scans_path);
-  const std::string sp = (fs::path(o.out_dir) / "summary.json").string();
-  std::ofstream sf(sp);
-  sf << j.str() << "\n";
-  if (!sf) throw std::runtime_error(sp + ": cannot write");
-  res.outputs.push_back(sp);
-  return res;
+  PerceiveJob job(o);
+  if (!o.cloud.empty())
+    job.perceiveCloudFile();
+  else
+    job.perceiveRawlog();
+  return job.finish();
 }
 
 }  // namespace carenav::perception

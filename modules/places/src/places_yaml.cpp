@@ -213,58 +213,73 @@ std::string placesPathForMap(const std::string& map_path) {
   return map_path + ".places.yaml";
 }
 
-PlacesFile parsePlaces(const std::string& text, const std::string& origin) {
-  Parser ps{origin};
-  if (text.find_first_not_of(" \t\r\n") == std::string::npos) ps.fail("the file is empty", 1);
-  PlacesFile f;
-  enum class Section { None, Rooms, Places } section = Section::None;
+namespace {
+
+enum class Section { None, Rooms, Places };
+
+/** The line pass of a places file: top-level keys and the items of its lists. */
+struct PlacesLines {
+  explicit PlacesLines(Parser& parser) : ps(parser) {}
+
+  Parser& ps;
+  Section section = Section::None;
   std::vector<std::pair<Section, Item>> items;
   bool have_format = false, have_rooms = false, have_places = false, ended = false;
   int dash_indent = -1;
 
-  std::stringstream ss(text);
-  std::string raw;
-  while (std::getline(ss, raw)) {
+  void readLine(const std::string& raw) {
     ++ps.line;
     if (raw.find('\t') != std::string::npos && raw.find_first_not_of(" \t") != std::string::npos &&
         raw.find('\t') < raw.find_first_not_of(" \t"))
       ps.fail("tab in the indentation; use spaces");
     const std::string body = Parser::trim(ps.stripComment(raw));
-    if (body.empty()) continue;
+    if (body.empty()) return;
     if (ended) ps.fail("text after \"end: true\"");
     const int indent = static_cast<int>(raw.find_first_not_of(' '));
     const bool dash = body == "-" || body.rfind("- ", 0) == 0;
     // Items may start at column 1 under their key, as YAML allows.
-    if (indent == 0 && !(dash && section != Section::None)) {
-      const auto [key, value] = ps.keyValue(body);
-      if (key == "format") {
-        if (have_format) ps.fail("format is given twice");
-        if (ps.line != 1 && (have_rooms || have_places)) ps.fail("format must come first");
-        if (value != "1")
-          ps.fail("format \"" + value + "\" is not supported (this carenav reads format 1)");
-        have_format = true;
-        section = Section::None;
-      } else if (key == "rooms" || key == "places") {
-        if (!have_format) ps.fail("the file must start with \"format: 1\"");
-        bool& seen = key == "rooms" ? have_rooms : have_places;
-        if (seen) ps.fail(key + " is given twice");
-        seen = true;
-        if (value == "[]")
-          section = Section::None;
-        else if (value.empty())
-          section = key == "rooms" ? Section::Rooms : Section::Places;
-        else
-          ps.fail(key + ": expected a list of items below it, or []");
-        dash_indent = -1;
-      } else if (key == "end") {
-        if (value != "true") ps.fail("end: expected \"true\"");
-        if (!have_format) ps.fail("the file must start with \"format: 1\"");
-        ended = true;
-      } else {
-        ps.fail("unknown key \"" + key + "\" (expected format, rooms, places, end)");
-      }
-      continue;
+    if (indent == 0 && !(dash && section != Section::None))
+      readTopKey(body);
+    else
+      readItemLine(body, indent, dash);
+  }
+
+  void readTopKey(const std::string& body) {
+    const auto [key, value] = ps.keyValue(body);
+    if (key == "format") {
+      if (have_format) ps.fail("format is given twice");
+      if (ps.line != 1 && (have_rooms || have_places)) ps.fail("format must come first");
+      if (value != "1")
+        ps.fail("format \"" + value + "\" is not supported (this carenav reads format 1)");
+      have_format = true;
+      section = Section::None;
+    } else if (key == "rooms" || key == "places") {
+      readListKey(key, value);
+    } else if (key == "end") {
+      if (value != "true") ps.fail("end: expected \"true\"");
+      if (!have_format) ps.fail("the file must start with \"format: 1\"");
+      ended = true;
+    } else {
+      ps.fail("unknown key \"" + key + "\" (expected format, rooms, places, end)");
     }
+  }
+
+  void readListKey(const std::string& key, const std::string& value) {
+    if (!have_format) ps.fail("the file must start with \"format: 1\"");
+    bool& seen = key == "rooms" ? have_rooms : have_places;
+    if (seen) ps.fail(key + " is given twice");
+    seen = true;
+    if (value == "[]")
+      section = Section::None;
+    else if (value.empty())
+      section = key == "rooms" ? Section::Rooms : Section::Places;
+    else
+      ps.fail(key + ": expected a list of items below it, or []");
+    dash_indent = -1;
+  }
+
+  /** A "- key: value" line that starts an item, or a "key: value" line inside one. */
+  void readItemLine(const std::string& body, int indent, bool dash) {
     if (section == Section::None)
       ps.fail("indented line outside the rooms or places list: \"" + body + "\"");
     std::string kv = body;
@@ -275,7 +290,7 @@ PlacesFile parsePlaces(const std::string& text, const std::string& origin) {
       dash_indent = indent;
       items.push_back({section, Item{ps.line, {}}});
       kv = Parser::trim(body.substr(1));
-      if (kv.empty()) continue;
+      if (kv.empty()) return;
     } else {
       if (items.empty() || items.back().first != section)
         ps.fail("\"" + body + "\" is not inside a \"- \" list item");
@@ -286,75 +301,95 @@ PlacesFile parsePlaces(const std::string& text, const std::string& origin) {
     if (values.count(key)) ps.fail(key + " is given twice in this item");
     values[key] = {value, ps.line};
   }
-  if (!have_format) ps.fail("no \"format: 1\" line", 1);
-  if (!ended)
-    ps.fail("the file does not end with \"end: true\": it is truncated or incomplete", ps.line);
+};
 
-  for (auto& entry : items) {
-    // Named, not a structured binding: C++17 lambdas cannot capture those (clang).
-    const auto& sec = entry.first;
-    auto& item = entry.second;
-    auto need = [&](const std::string& key) -> std::pair<std::string, int> {
-      auto it = item.values.find(key);
-      if (it == item.values.end())
-        ps.fail(std::string(sec == Section::Rooms ? "room" : "place") + " item has no " + key,
-                item.line);
-      ps.line = it->second.second;
-      return it->second;
-    };
-    auto allowed = [&](std::initializer_list<const char*> keys) {
-      for (const auto& [k, v] : item.values) {
-        bool ok = false;
-        for (const char* a : keys) ok = ok || k == a;
-        if (!ok) {
-          std::string list;
-          for (const char* a : keys) list += (list.empty() ? "" : ", ") + std::string(a);
-          ps.fail("unknown key \"" + k + "\" (expected " + list + ")", v.second);
-        }
-      }
-    };
-    if (sec == Section::Rooms) {
-      allowed({"name", "polygon", "default_place"});
-      Room r;
-      r.line = item.line;
-      r.name = ps.string(need("name").first, "name");
-      r.polygon = ps.pointList(need("polygon").first, "polygon");
-      if (item.values.count("default_place"))
-        r.default_place = ps.string(need("default_place").first, "default_place");
-      try {
-        f.addRoom(r);
-      } catch (const InputError& e) {
-        ps.fail(e.what(), item.line);
-      }
-    } else {
-      allowed({"name", "pose", "kind", "room"});
-      Place p;
-      p.line = item.line;
-      p.name = ps.string(need("name").first, "name");
-      const auto pose = ps.numberList(need("pose").first, "pose");
-      if (pose.size() != 3) ps.fail("pose: expected [x, y, heading_deg]");
-      p.x = pose[0];
-      p.y = pose[1];
-      p.heading_deg = pose[2];
-      if (item.values.count("kind")) {
-        const std::string k = ps.string(need("kind").first, "kind");
-        const auto kind = parsePlaceKind(k);
-        if (!kind)
-          ps.fail("kind \"" + k + "\": expected place, user-search, object-search or dock");
-        p.kind = *kind;
-      }
-      if (item.values.count("room")) p.room = ps.string(need("room").first, "room");
-      // Room membership is checked by `places check`, not here: a file whose
-      // rooms were redrawn must still load so that it can be fixed.
-      const std::string room = p.room;
-      p.room.clear();
-      try {
-        f.addPlace(p);
-      } catch (const InputError& e) {
-        ps.fail(e.what(), item.line);
-      }
-      f.places.back().room = room;
+/** The value of a required key of an item (its line becomes the parser's). */
+std::pair<std::string, int> need(Parser& ps, Section sec, const Item& item,
+                                 const std::string& key) {
+  auto it = item.values.find(key);
+  if (it == item.values.end())
+    ps.fail(std::string(sec == Section::Rooms ? "room" : "place") + " item has no " + key,
+            item.line);
+  ps.line = it->second.second;
+  return it->second;
+}
+
+void checkAllowedKeys(const Parser& ps, const Item& item, std::initializer_list<const char*> keys) {
+  for (const auto& [k, v] : item.values) {
+    bool ok = false;
+    for (const char* a : keys) ok = ok || k == a;
+    if (!ok) {
+      std::string list;
+      for (const char* a : keys) list += (list.empty() ? "" : ", ") + std::string(a);
+      ps.fail("unknown key \"" + k + "\" (expected " + list + ")", v.second);
     }
+  }
+}
+
+void addRoomItem(Parser& ps, const Item& item, PlacesFile& f) {
+  const Section sec = Section::Rooms;
+  checkAllowedKeys(ps, item, {"name", "polygon", "default_place"});
+  Room r;
+  r.line = item.line;
+  r.name = ps.string(need(ps, sec, item, "name").first, "name");
+  r.polygon = ps.pointList(need(ps, sec, item, "polygon").first, "polygon");
+  if (item.values.count("default_place"))
+    r.default_place = ps.string(need(ps, sec, item, "default_place").first, "default_place");
+  try {
+    f.addRoom(r);
+  } catch (const InputError& e) {
+    ps.fail(e.what(), item.line);
+  }
+}
+
+void addPlaceItem(Parser& ps, const Item& item, PlacesFile& f) {
+  const Section sec = Section::Places;
+  checkAllowedKeys(ps, item, {"name", "pose", "kind", "room"});
+  Place p;
+  p.line = item.line;
+  p.name = ps.string(need(ps, sec, item, "name").first, "name");
+  const auto pose = ps.numberList(need(ps, sec, item, "pose").first, "pose");
+  if (pose.size() != 3) ps.fail("pose: expected [x, y, heading_deg]");
+  p.x = pose[0];
+  p.y = pose[1];
+  p.heading_deg = pose[2];
+  if (item.values.count("kind")) {
+    const std::string k = ps.string(need(ps, sec, item, "kind").first, "kind");
+    const auto kind = parsePlaceKind(k);
+    if (!kind) ps.fail("kind \"" + k + "\": expected place, user-search, object-search or dock");
+    p.kind = *kind;
+  }
+  if (item.values.count("room")) p.room = ps.string(need(ps, sec, item, "room").first, "room");
+  // Room membership is checked by `places check`, not here: a file whose
+  // rooms were redrawn must still load so that it can be fixed.
+  const std::string room = p.room;
+  p.room.clear();
+  try {
+    f.addPlace(p);
+  } catch (const InputError& e) {
+    ps.fail(e.what(), item.line);
+  }
+  f.places.back().room = room;
+}
+
+}  // namespace
+
+PlacesFile parsePlaces(const std::string& text, const std::string& origin) {
+  Parser ps{origin};
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) ps.fail("the file is empty", 1);
+  PlacesLines lines(ps);
+  std::stringstream ss(text);
+  std::string raw;
+  while (std::getline(ss, raw)) lines.readLine(raw);
+  if (!lines.have_format) ps.fail("no \"format: 1\" line", 1);
+  if (!lines.ended)
+    ps.fail("the file does not end with \"end: true\": it is truncated or incomplete", ps.line);
+  PlacesFile f;
+  for (const auto& [sec, item] : lines.items) {
+    if (sec == Section::Rooms)
+      addRoomItem(ps, item, f);
+    else
+      addPlaceItem(ps, item, f);
   }
   return f;
 }
