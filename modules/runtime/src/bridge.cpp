@@ -130,12 +130,10 @@ std::vector<float> reduceRanges(const std::vector<float>& ranges, size_t n,
 // A lidar2d's or range array's ranges as the MRPT observation the
 // navigator takes: beyond the sensor's beams or segments, each bin keeps
 // its nearest valid return.
-mrpt::obs::CObservation::Ptr bridgeObservation(const BridgeMessage& scan, const SensorParams& s,
-                                               bool& reduced) {
+mrpt::obs::CObservation::Ptr bridgeObservation(const BridgeMessage& scan, const SensorParams& s) {
   if (s.type == "range-array") {
     const auto valid = [&](float r) { return std::isfinite(r) && r > 0 && r < s.range_max; };
     const size_t cap = static_cast<size_t>(std::max(1, s.segments));
-    reduced = scan.ranges.size() > cap;
     const std::vector<float> ranges = reduceRanges(scan.ranges, cap, valid);
     // Segments spread evenly over the fov, each a cone (the Leddar).
     auto ra = std::make_shared<mrpt::obs::CObservationRange>();
@@ -159,7 +157,6 @@ mrpt::obs::CObservation::Ptr bridgeObservation(const BridgeMessage& scan, const 
     return std::isfinite(r) && r >= s.range_min && r < s.range_max;
   };
   const size_t cap = static_cast<size_t>(std::max(1, s.beams));
-  reduced = scan.ranges.size() > cap;
   const std::vector<float> ranges = reduceRanges(scan.ranges, cap, valid);
   auto obs = std::make_shared<mrpt::obs::CObservation2DRangeScan>();
   obs->sensorLabel = s.label;

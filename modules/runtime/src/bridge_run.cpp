@@ -3,10 +3,10 @@
 #include <carenav/common/errors.h>
 #include <carenav/common/text.h>
 #include <carenav/io/map_io.h>
+#include <carenav/places/places.h>
 #include <carenav/runtime/bridge.h>
 #include <carenav/runtime/line_socket.h>
 #include <carenav/runtime/session.h>
-#include <carenav/places/places.h>
 
 #include <chrono>
 #include <cmath>
@@ -121,8 +121,7 @@ bool BridgeLoop::pass() {
   if (error) return false;
   for (auto& [label, ps] : pending_)
     if (ps) {
-      bool reduced = false;
-      s_.observation(bridgeObservation(ps->msg, lidars_.at(label), reduced), ps->odom, ps->t);
+      s_.observation(bridgeObservation(ps->msg, lidars_.at(label)), ps->odom, ps->t);
       ps.reset();
     }
   if (inputEnded(alive)) return false;

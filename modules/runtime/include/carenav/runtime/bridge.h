@@ -24,8 +24,8 @@
 #pragma once
 
 #include <carenav/common/robot.h>
-#include <carenav/runtime/intent.h>
 #include <carenav/navigation/local_planner.h>
+#include <carenav/runtime/intent.h>
 #include <carenav/runtime/scenario.h>
 
 #include <mrpt/obs/CObservation.h>
@@ -70,10 +70,9 @@ std::vector<float> reduceRanges(const std::vector<float>& ranges, size_t n,
                                 const std::function<bool(float)>& valid);
 
 /** A `scan` message as the observation of its sensor `s` (a lidar2d or a
- *  range-array of the profile); `reduced`: it had more ranges than the
- *  sensor's beams or segments (each kept bin holds its nearest return). */
-mrpt::obs::CObservation::Ptr bridgeObservation(const BridgeMessage& scan, const SensorParams& s,
-                                               bool& reduced);
+ *  range-array of the profile); more ranges than the sensor's beams or
+ *  segments are reduced (reduceRanges: each kept bin its nearest return). */
+mrpt::obs::CObservation::Ptr bridgeObservation(const BridgeMessage& scan, const SensorParams& s);
 
 struct BridgeOptions {
   std::string address;            ///< HOST:PORT of the robot's bridge
