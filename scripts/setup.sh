@@ -23,6 +23,8 @@ packages=(
   libcli11-dev libgtest-dev libbenchmark-dev
   # JSON written and read (summaries, results between processes)
   nlohmann-json3-dev
+  # YAML with line numbers (worlds, scenarios, places, ROS map YAML)
+  libyaml-cpp-dev
 )
 
 missing=()

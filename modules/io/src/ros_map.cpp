@@ -1,6 +1,7 @@
 // ROS map_server maps: the YAML description, PGM/PNG images, and the
 // pixel-to-cell rules of map_server's loader and map_saver.
 #include <carenav/common/errors.h>
+#include <carenav/common/yaml.h>
 #include <carenav/io/map_io.h>
 
 #include <mrpt/img/CImage.h>
@@ -25,11 +26,11 @@ using map_detail::toLower;
 
 namespace {
 
-// ------------------------------------------------------------ flat YAML
+// ------------------------------------------------------------ map_server YAML
 //
 // A map_server YAML is a flat mapping of scalars plus one short list
-// (origin). A small reader for that subset reports every defect with its
-// line, which a general YAML library does not do in a form we can pass on.
+// (origin), read by the common YAML reader (lines kept); values nested
+// deeper are kept only as "nested", for the keys carenav does not read.
 
 struct YamlValue {
   int line = 0;
@@ -38,29 +39,6 @@ struct YamlValue {
   std::string scalar;
   std::vector<std::string> items;
 };
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t");
-  return s.substr(b, e - b + 1);
-}
-
-// Removes a trailing comment: '#' at the start or after a blank, outside quotes.
-std::string stripComment(const std::string& s) {
-  char quote = 0;
-  for (size_t i = 0; i < s.size(); ++i) {
-    const char c = s[i];
-    if (quote) {
-      if (c == quote) quote = 0;
-    } else if (c == '"' || c == '\'') {
-      quote = c;
-    } else if (c == '#' && (i == 0 || s[i - 1] == ' ' || s[i - 1] == '\t')) {
-      return s.substr(0, i);
-    }
-  }
-  return s;
-}
 
 class YamlError {
  public:
@@ -74,119 +52,30 @@ class YamlError {
   std::string path_;
 };
 
-std::string unquote(const std::string& v, int line, const YamlError& err) {
-  if (v.size() >= 1 && (v[0] == '"' || v[0] == '\'')) {
-    const char q = v[0];
-    if (v.size() < 2 || v.back() != q) err.at(line, "unterminated quoted string " + v);
-    std::string out;
-    for (size_t i = 1; i + 1 < v.size(); ++i) {
-      if (q == '"' && v[i] == '\\' && i + 2 < v.size()) {
-        out += v[++i];
-      } else if (q == '\'' && v[i] == '\'' && v[i + 1] == '\'') {
-        out += '\'';
-        ++i;
-      } else {
-        out += v[i];
-      }
-    }
-    return out;
-  }
-  return v;
-}
-
-std::vector<std::string> splitFlowList(const std::string& v, int line, const YamlError& err) {
-  if (v.back() != ']') err.at(line, "unterminated list '" + v + "' (a ']' is missing)");
-  const std::string inner = trim(v.substr(1, v.size() - 2));
-  std::vector<std::string> items;
-  if (inner.empty()) return items;
-  std::string cur;
-  char quote = 0;
-  for (char c : inner) {
-    if (quote) {
-      if (c == quote) quote = 0;
-      cur += c;
-    } else if (c == '"' || c == '\'') {
-      quote = c;
-      cur += c;
-    } else if (c == ',') {
-      items.push_back(unquote(trim(cur), line, err));
-      cur.clear();
-    } else if (c == '[' || c == '{') {
-      err.at(line, "nested lists or mappings are not expected in '" + v + "'");
-    } else {
-      cur += c;
-    }
-  }
-  items.push_back(unquote(trim(cur), line, err));
-  return items;
+/** A list item as text, for messages ("[1, 2]" for a nested list). */
+std::string itemText(const yaml::Node& n) {
+  if (n.kind == yaml::Node::Kind::Scalar) return n.scalar;
+  if (n.kind == yaml::Node::Kind::Map) return "{...}";
+  std::string s = "[";
+  for (size_t i = 0; i < n.seq.size(); ++i) s += (i ? ", " : "") + itemText(n.seq[i]);
+  return s + "]";
 }
 
 std::map<std::string, YamlValue> parseFlatYaml(const std::string& path, const std::string& text) {
   const YamlError err(path);
+  const yaml::Node root = yaml::parse(text, path);
+  if (root.kind != yaml::Node::Kind::Map)
+    err.at(root.line, "expected 'key: value', got '" + itemText(root) + "'");
   std::map<std::string, YamlValue> out;
-  std::istringstream is(text);
-  std::string raw;
-  int lineno = 0;
-  std::string open_key;  // a key whose value follows on indented lines
-  while (std::getline(is, raw)) {
-    ++lineno;
-    if (lineno == 1 && raw.compare(0, 3, "\xEF\xBB\xBF") == 0) raw.erase(0, 3);  // UTF-8 BOM
-    if (!raw.empty() && raw.back() == '\r') raw.pop_back();
-    if (raw.find('\0') != std::string::npos)
-      err.at(lineno, "binary data: this is not a YAML text file");
-    const std::string line = trim(stripComment(raw));
-    if (line.empty()) continue;
-    if (line == "---" || line == "...") continue;
-    const bool indented = raw[0] == ' ' || raw[0] == '\t' || raw[0] == '-';
-    if (indented && raw[0] != '-' && open_key.empty())
-      err.at(lineno, "unexpected indentation (a map_server YAML is a flat list of 'key: value')");
-    if (!open_key.empty() && (indented || line[0] == '-')) {
-      YamlValue& v = out[open_key];
-      if (line[0] == '-' && (line.size() == 1 || line[1] == ' ')) {
-        if (v.is_nested && !v.is_list) continue;  // inside some mapping we ignore
-        v.is_list = true;
-        v.items.push_back(unquote(trim(line.substr(1)), lineno, err));
-      } else {
-        v.is_nested = true;  // a nested mapping: fine unless we need the key
-      }
-      continue;
-    }
-    open_key.clear();
-    // key: value, the colon followed by a blank or the end of the line.
-    size_t colon = std::string::npos;
-    char quote = 0;
-    for (size_t i = 0; i < line.size(); ++i) {
-      if (quote) {
-        if (line[i] == quote) quote = 0;
-      } else if (line[i] == '"' || line[i] == '\'') {
-        quote = line[i];
-      } else if (line[i] == ':' &&
-                 (i + 1 == line.size() || line[i + 1] == ' ' || line[i + 1] == '\t')) {
-        colon = i;
-        break;
-      }
-    }
-    if (colon == std::string::npos) err.at(lineno, "expected 'key: value', got '" + line + "'");
-    const std::string key = unquote(trim(line.substr(0, colon)), lineno, err);
-    if (key.empty()) err.at(lineno, "empty key");
-    const std::string value = trim(line.substr(colon + 1));
-    if (auto it = out.find(key); it != out.end())
-      err.at(lineno,
-             "duplicate key '" + key + "' (first on line " + std::to_string(it->second.line) + ")");
+  for (size_t i = 0; i < root.map.size(); ++i) {
+    const yaml::Node& n = root.map[i].second;
     YamlValue v;
-    v.line = lineno;
-    if (value.empty()) {
-      open_key = key;
-    } else if (value[0] == '[') {
-      v.is_list = true;
-      v.items = splitFlowList(value, lineno, err);
-    } else if (value[0] == '{' || value[0] == '&' || value[0] == '*' || value[0] == '|' ||
-               value[0] == '>') {
-      v.is_nested = true;
-    } else {
-      v.scalar = unquote(value, lineno, err);
-    }
-    out[key] = v;
+    v.line = root.key_lines[i];
+    v.is_nested = n.kind == yaml::Node::Kind::Map;
+    v.is_list = n.kind == yaml::Node::Kind::Seq;
+    for (const yaml::Node& item : n.seq) v.items.push_back(itemText(item));
+    v.scalar = n.scalar;
+    out[root.map[i].first] = v;
   }
   return out;
 }
@@ -394,10 +283,10 @@ double yamlNumber(const std::map<std::string, YamlValue>& y, const std::string& 
 RosMapYaml readRosMapYaml(const std::string& yaml_path) {
   const YamlError err(yaml_path);
   const std::string text = readWholeFile(yaml_path, "a ROS map YAML file");
-  const auto y = parseFlatYaml(yaml_path, text);
-  if (y.empty())
+  if (yaml::isBlank(text))
     err.file(std::string(text.empty() ? "empty file" : "empty file (only blanks and comments)") +
              ", expected a ROS map_server YAML (image, resolution, origin)");
+  const auto y = parseFlatYaml(yaml_path, text);
 
   RosMapYaml m;
   m.yaml_path = yaml_path;
