@@ -1,3 +1,4 @@
+#include <carenav/common/distance_transform.h>
 #include <carenav/localization/likelihood_field.h>
 
 #include <mrpt/maps/CPointsMap.h>
@@ -11,59 +12,15 @@ using mrpt::maps::COccupancyGridMap2D;
 
 namespace {
 
-constexpr double kDtInf = 1e20;
-
-/** One-dimensional squared Euclidean distance transform of f over n samples
- *  (lower envelope of the parabolas (q - p)^2 + f(p)): Felzenszwalb,
- *  Huttenlocher 2012, "Distance Transforms of Sampled Functions", Theory of
- *  Computing 8, sec. 2.1, algorithm DT(f). v (n) and z (n + 1) are scratch. */
-void distanceTransform1d(const double* f, int n, double* d, int* v, double* z) {
-  int k = 0;
-  v[0] = 0;
-  z[0] = -kDtInf;
-  z[1] = kDtInf;
-  for (int q = 1; q < n; ++q) {
-    // z[0] = -inf stops the loop at k = 0 (f is at most kDtInf, so s > -kDtInf)
-    auto cross = [&](int r) {
-      return ((f[q] + double(q) * q) - (f[r] + double(r) * r)) / (2.0 * (q - r));
-    };
-    double s = cross(v[k]);
-    while (s <= z[k]) s = cross(v[--k]);
-    ++k;
-    v[k] = q;
-    z[k] = s;
-    z[k + 1] = kDtInf;
-  }
-  k = 0;
-  for (int q = 0; q < n; ++q) {
-    while (z[k + 1] < q) ++k;
-    const double dq = q - v[k];
-    d[q] = dq * dq + f[v[k]];
-  }
-}
-
 /** Squared distance (in cells²) from every cell of the grid to the nearest
- *  occupied one (free probability below 0.5): rows, then columns. */
+ *  occupied one (free probability below 0.5). */
 std::vector<double> squaredDistances(const COccupancyGridMap2D& map, int sx, int sy) {
   const size_t cells = size_t(sx) * size_t(sy);
-  std::vector<double> g(cells);
+  std::vector<uint8_t> source(cells);
   const auto occupied = COccupancyGridMap2D::p2l(0.5f);
   const auto& raw = map.getRawMap();
-  for (size_t k = 0; k < cells; ++k) g[k] = raw[k] < occupied ? 0.0 : kDtInf;
-  const int longest = std::max(sx, sy);
-  std::vector<double> f(longest), d(longest), z(longest + 1);
-  std::vector<int> v(longest);
-  for (int cy = 0; cy < sy; ++cy) {  // along x
-    double* row = g.data() + size_t(cy) * sx;
-    std::copy(row, row + sx, f.begin());
-    distanceTransform1d(f.data(), sx, row, v.data(), z.data());
-  }
-  for (int cx = 0; cx < sx; ++cx) {  // along y
-    for (int cy = 0; cy < sy; ++cy) f[cy] = g[cx + size_t(cy) * sx];
-    distanceTransform1d(f.data(), sy, d.data(), v.data(), z.data());
-    for (int cy = 0; cy < sy; ++cy) g[cx + size_t(cy) * sx] = d[cy];
-  }
-  return g;
+  for (size_t k = 0; k < cells; ++k) source[k] = raw[k] < occupied ? 0 : 1;
+  return squaredDistanceTransform(source, sx, sy);
 }
 
 }  // namespace

@@ -1,3 +1,4 @@
+#include <carenav/common/distance_transform.h>
 #include <carenav/common/errors.h>
 #include <carenav/navigation/global_planner.h>
 #include <carenav/navigation/local_map.h>

@@ -1,3 +1,4 @@
+#include <carenav/common/distance_transform.h>
 #include <carenav/common/errors.h>
 #include <carenav/navigation/local_map.h>
 
@@ -279,68 +280,6 @@ bool Footprint::contains(double x, double y) const {
     if ((a.y > y) != (b.y > y) && x < (b.x - a.x) * (y - a.y) / (b.y - a.y) + a.x) in = !in;
   }
   return in;
-}
-
-// ---------------------------------------------------------------- distance transform
-
-namespace {
-
-/** 1D squared distance transform of f (lower envelope of parabolas rooted
- *  at the finite samples); all infinite when no sample is finite. */
-void dt1d(const float* f, int n, int stride, float* out, std::vector<int>& v,
-          std::vector<float>& z) {
-  const float inf = std::numeric_limits<float>::infinity();
-  int k = -1;
-  for (int q = 0; q < n; ++q) {
-    const float fq = f[q * stride];
-    if (fq == inf) continue;
-    if (k < 0) {
-      k = 0;
-      v[0] = q;
-      z[0] = -inf;
-      z[1] = inf;
-      continue;
-    }
-    float s;
-    while (true) {
-      const int r = v[k];
-      s = ((fq + float(q) * float(q)) - (f[r * stride] + float(r) * float(r))) /
-          (2.0f * float(q - r));
-      if (s <= z[k]) {
-        --k;  // z[0] is -inf, so k stays >= 0
-        continue;
-      }
-      break;
-    }
-    ++k;
-    v[k] = q;
-    z[k] = s;
-    z[k + 1] = inf;
-  }
-  if (k < 0) {
-    for (int q = 0; q < n; ++q) out[q * stride] = inf;
-    return;
-  }
-  k = 0;
-  for (int q = 0; q < n; ++q) {
-    while (z[k + 1] < float(q)) ++k;
-    const float d = float(q - v[k]);
-    out[q * stride] = d * d + f[v[k] * stride];
-  }
-}
-
-}  // namespace
-
-std::vector<float> squaredDistanceTransform(const std::vector<uint8_t>& free, int nx, int ny) {
-  const float inf = std::numeric_limits<float>::infinity();
-  std::vector<float> f(free.size()), g(free.size());
-  for (size_t i = 0; i < free.size(); ++i) f[i] = free[i] ? inf : 0.0f;
-  const int n = std::max(nx, ny);
-  std::vector<int> v(n + 1);
-  std::vector<float> z(n + 2);
-  for (int x = 0; x < nx; ++x) dt1d(&f[x], ny, nx, &g[x], v, z);           // columns
-  for (int y = 0; y < ny; ++y) dt1d(&g[y * nx], nx, 1, &f[y * nx], v, z);  // rows
-  return f;
 }
 
 // ---------------------------------------------------------------- cost map

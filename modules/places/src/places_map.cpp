@@ -1,4 +1,5 @@
 // Rooms and places against the occupancy grid: checks, goals, pictures.
+#include <carenav/common/distance_transform.h>
 #include <carenav/places/places.h>
 
 #include <algorithm>
@@ -106,35 +107,6 @@ std::string fmt(double v) {
 
 const char* className(CellClass c) {
   return c == CellClass::Occupied ? "occupied" : c == CellClass::Unknown ? "unknown" : "free";
-}
-
-// Squared Euclidean distance transform of one line (Felzenszwalb and
-// Huttenlocher 2012): d[i] = min_j (f[j] + (i - j)^2).
-void edt1d(const std::vector<double>& f, std::vector<double>& d) {
-  const int n = static_cast<int>(f.size());
-  std::vector<int> v(n);
-  std::vector<double> z(n + 1);
-  int k = 0;
-  v[0] = 0;
-  z[0] = -std::numeric_limits<double>::infinity();
-  z[1] = std::numeric_limits<double>::infinity();
-  auto meet = [&](int q, int p) {  // where the parabolas of q and p cross
-    return ((f[q] + double(q) * q) - (f[p] + double(p) * p)) / (2.0 * q - 2.0 * p);
-  };
-  for (int q = 1; q < n; ++q) {
-    double s = meet(q, v[k]);
-    while (s <= z[k]) s = meet(q, v[--k]);  // z[0] = -inf stops it
-    ++k;
-    v[k] = q;
-    z[k] = s;
-    z[k + 1] = std::numeric_limits<double>::infinity();
-  }
-  k = 0;
-  d.assign(n, 0);
-  for (int q = 0; q < n; ++q) {
-    while (z[k + 1] < q) ++k;
-    d[q] = double(q - v[k]) * (q - v[k]) + f[v[k]];
-  }
 }
 
 }  // namespace
@@ -268,8 +240,7 @@ Goal resolveGoal(const PlacesFile& f, const COccupancyGridMap2D& map, const std:
   const int w = c.x1 - c.x0 + 1, h = c.y1 - c.y0 + 1;
   if (w < 3 || h < 3)
     throw InputError("goal \"" + name + "\": room \"" + r->name + "\" holds no free cell");
-  const double inf = 1e20;
-  std::vector<double> grid(static_cast<size_t>(w) * h, 0.0);
+  std::vector<uint8_t> room_free(static_cast<size_t>(w) * h, 0);
   bool any = false;
   for (int j = 0; j < h; ++j)
     for (int i = 0; i < w; ++i) {
@@ -278,29 +249,18 @@ Goal resolveGoal(const PlacesFile& f, const COccupancyGridMap2D& map, const std:
                           cy < static_cast<int>(map.getSizeY());
       const bool ok = on_map && pointInPolygon(r->polygon, cellX(map, cx), cellY(map, cy)) &&
                       classAt(map, cx, cy, t) == CellClass::Free;
-      grid[static_cast<size_t>(j) * w + i] = ok ? inf : 0.0;
+      room_free[static_cast<size_t>(j) * w + i] = ok ? 1 : 0;
       any = any || ok;
     }
   if (!any) throw InputError("goal \"" + name + "\": room \"" + r->name + "\" holds no free cell");
-  std::vector<double> line, d;
-  for (int i = 0; i < w; ++i) {  // columns
-    line.resize(h);
-    for (int j = 0; j < h; ++j) line[j] = grid[static_cast<size_t>(j) * w + i];
-    edt1d(line, d);
-    for (int j = 0; j < h; ++j) grid[static_cast<size_t>(j) * w + i] = d[j];
-  }
+  const std::vector<double> grid = squaredDistanceTransform(room_free, w, h);
   double best = -1, sum_i = 0, sum_j = 0, count = 0;
-  for (int j = 0; j < h; ++j) {  // rows
-    line.assign(grid.begin() + static_cast<size_t>(j) * w,
-                grid.begin() + static_cast<size_t>(j + 1) * w);
-    edt1d(line, d);
+  for (int j = 0; j < h; ++j)
     for (int i = 0; i < w; ++i) {
-      const size_t k = static_cast<size_t>(j) * w + i;
-      grid[k] = d[i];
-      if (d[i] > 0) sum_i += i, sum_j += j, ++count;
-      best = std::max(best, d[i]);
+      const double d = grid[static_cast<size_t>(j) * w + i];
+      if (d > 0) sum_i += i, sum_j += j, ++count;
+      best = std::max(best, d);
     }
-  }
   // On a grid many cells share the largest clearance (a long corridor): of
   // those within half a cell of it, take the one nearest the centroid of the
   // room's free cells, so the goal sits mid-room rather than at one end.

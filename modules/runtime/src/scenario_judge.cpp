@@ -1,6 +1,7 @@
 // Judging a scenario run from the simulator's truth (scenario_judge.h).
 #include "scenario_judge.h"
 
+#include <carenav/common/distance_transform.h>
 #include <carenav/common/text.h>
 #include <carenav/places/places.h>
 #include <carenav/sim/raycast.h>

@@ -1,4 +1,4 @@
-// Local cost map: distance transform, footprint queries, obstacle memory.
+// Local cost map: footprint queries, obstacle memory.
 #include <carenav/common/errors.h>
 #include <carenav/navigation/local_map.h>
 
@@ -11,33 +11,6 @@
 
 namespace carenav::navigation {
 namespace {
-
-TEST(DistanceTransform, MatchesBruteForceOnRandomGrids) {
-  std::mt19937 rng(3);
-  for (int trial = 0; trial < 20; ++trial) {
-    const int nx = 5 + static_cast<int>(rng() % 40), ny = 5 + static_cast<int>(rng() % 40);
-    std::vector<uint8_t> free(static_cast<size_t>(nx) * ny, 1);
-    const int obstacles = static_cast<int>(rng() % 12);  // 0: no obstacle at all
-    std::vector<std::pair<int, int>> obs;
-    for (int k = 0; k < obstacles; ++k) {
-      const int x = static_cast<int>(rng() % nx), y = static_cast<int>(rng() % ny);
-      free[static_cast<size_t>(y) * nx + x] = 0;
-      obs.emplace_back(x, y);
-    }
-    const auto d2 = squaredDistanceTransform(free, nx, ny);
-    for (int y = 0; y < ny; ++y)
-      for (int x = 0; x < nx; ++x) {
-        double best = std::numeric_limits<double>::infinity();
-        for (const auto& [ox, oy] : obs)
-          best = std::min(best, double(x - ox) * (x - ox) + double(y - oy) * (y - oy));
-        const float got = d2[static_cast<size_t>(y) * nx + x];
-        if (std::isinf(best))
-          EXPECT_TRUE(std::isinf(got));
-        else
-          ASSERT_FLOAT_EQ(got, static_cast<float>(best)) << trial << " at " << x << "," << y;
-      }
-  }
-}
 
 NavigationParams params() {
   NavigationParams p;

@@ -196,11 +196,5 @@ class LocalCostmap {
   Footprint fp_;
 };
 
-/** Exact squared Euclidean distance transform of a binary grid (row-major,
- *  nx by ny): input 0 for obstacle cells, anything else for free; output in
- *  cells squared. Two passes of the 1D lower-envelope algorithm of
- *  Felzenszwalb and Huttenlocher, "Distance Transforms of Sampled Functions",
- *  Theory of Computing 8 (2012). */
-std::vector<float> squaredDistanceTransform(const std::vector<uint8_t>& free, int nx, int ny);
 
 }  // namespace carenav::navigation
