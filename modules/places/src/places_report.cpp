@@ -96,6 +96,11 @@ std::string checkText(const PlacesFile& f, const std::string& path,
   return o;
 }
 
+std::string checkFailureText(const std::string& path, const std::vector<Problem>& problems) {
+  return path + ": " + std::to_string(problems.size()) + " problem" +
+         (problems.size() == 1 ? "" : "s");
+}
+
 Json goalJson(const std::string& name, const Goal& g) {
   return {{"name", name},   {"x", g.x},
           {"y", g.y},       {"heading_deg", g.heading_deg},
@@ -105,6 +110,21 @@ Json goalJson(const std::string& name, const Goal& g) {
 std::string goalText(const Goal& g) {
   return fmt(g.x) + " " + fmt(g.y) + " " + fmt(g.heading_deg) + "\n";
 }
+
+std::string roomAddedText(const Room& r) {
+  return "room \"" + r.name + "\" added (" + std::to_string(r.polygon.size()) + " corners)\n";
+}
+
+std::string placeAddedText(const Place& p, const Room* room) {
+  return "place \"" + p.name + "\" added in " +
+         (room ? "room \"" + room->name + "\"" : std::string("no room")) + "\n";
+}
+
+std::string renamedText(const std::string& old_name, const std::string& new_name) {
+  return "\"" + old_name + "\" renamed to \"" + new_name + "\"\n";
+}
+
+std::string removedText(const std::string& name) { return "\"" + name + "\" removed\n"; }
 
 RoomArea readRoomArea(const std::string& places_file, const std::string& name) {
   const PlacesFile f = readPlacesFile(places_file);

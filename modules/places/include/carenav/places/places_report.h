@@ -30,6 +30,17 @@ std::string checkText(const PlacesFile& f, const std::string& path,
 Json goalJson(const std::string& name, const Goal& g);
 std::string goalText(const Goal& g);
 
+/** `check`'s error when there are problems: "FILE: N problem(s)". */
+std::string checkFailureText(const std::string& path, const std::vector<Problem>& problems);
+
+/** The edits: `room "NAME" added (N corners)`, `place "NAME" added in room
+ *  "ROOM"` (or "in no room"), `"OLD" renamed to "NEW"`, `"NAME" removed`;
+ *  each one line. */
+std::string roomAddedText(const Room& r);
+std::string placeAddedText(const Place& p, const Room* room);
+std::string renamedText(const std::string& old_name, const std::string& new_name);
+std::string removedText(const std::string& name);
+
 /** A room of a places file as an area: its name and whether a point lies
  *  inside (edges included). */
 struct RoomArea {
