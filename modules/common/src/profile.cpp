@@ -295,6 +295,33 @@ void Profile::applyOverrides(const std::vector<std::string>& assignments) {
   for (const auto& a : assignments) applyOverride(a);
 }
 
+namespace {
+
+/** "unknown key (did you mean 'k'?); keys of [section]: ...". A misspelt
+ *  old key gets its new place: "did you mean 'k_heading' (now
+ *  nav.goal_dwa.k_heading)?". */
+std::string unknownKeyMessage(const std::string& name, const std::string& key,
+                              const SectionSchema& schema, const ProfileSchemas& reg) {
+  std::string best, moved;
+  size_t bestd = 3;
+  for (const auto& s : schema.specs) {
+    const size_t d = editDistance(key, s.key);
+    if (d < bestd) bestd = d, best = s.key;
+  }
+  for (const auto& r : reg.renames()) {
+    if (r.old_section != name) continue;
+    const size_t d = editDistance(key, r.old_key);
+    if (d < bestd) bestd = d, best = r.old_key, moved = " (now " + r.newName() + ")";
+  }
+  std::string m = "unknown key";
+  if (!best.empty()) m += " (did you mean '" + best + "'" + moved + "?)";
+  std::string keys;
+  for (const auto& s : schema.specs) keys += (keys.empty() ? "" : ", ") + s.key;
+  return m + "; keys of [" + name + "]: " + keys;
+}
+
+}  // namespace
+
 // ---------------------------------------------------------------- renamed keys
 
 std::map<std::string, Profile::Section> Profile::effectiveSections() const {
@@ -401,18 +428,8 @@ std::vector<ProfileIssue> Profile::check() const {
       for (const auto& s : schema->specs)
         if (s.key == key) spec = &s;
       if (!spec) {
-        std::string best;
-        size_t bestd = 3;
-        for (const auto& s : schema->specs) {
-          const size_t d = editDistance(key, s.key);
-          if (d < bestd) bestd = d, best = s.key;
-        }
-        std::string m = "unknown key";
-        if (!best.empty()) m += " (did you mean '" + best + "'?)";
-        std::string keys;
-        for (const auto& s : schema->specs) keys += (keys.empty() ? "" : ", ") + s.key;
-        m += "; keys of [" + name + "]: " + keys;
-        issues.push_back({e ? e->origin : sec_origin, name, key, m});
+        issues.push_back(
+            {e ? e->origin : sec_origin, name, key, unknownKeyMessage(name, key, *schema, reg)});
       } else {
         issues.push_back(issueFor(name, key, *e, msg, spec));
       }

@@ -12,12 +12,18 @@
 #include <map>
 #include <set>
 
+#include <unistd.h>
+
 namespace carenav::navigation {
 namespace {
 
 namespace fs = std::filesystem;
 
 const char* kRobot = "[robot]\nv_max = 0.3\n";
+
+/** The [nav.*] sections and the renamed keys, for every test (ctest runs
+ *  each in its own process). */
+const bool kRegistered = (registerProfileSections(), true);
 
 /** A valid value other than the default, for every key of the tables. */
 std::string otherValue(const ParamSpec& s) {
@@ -32,7 +38,6 @@ std::string otherValue(const ParamSpec& s) {
 
 /** Every renamed key, by new section: key = otherValue. */
 std::map<std::string, std::string> renamedKeyLines() {
-  registerProfileSections();
   std::map<std::string, std::string> by_section;
   for (const auto& r : ProfileSchemas::instance().renames()) {
     if (r.old_section != "navigation") continue;
@@ -59,7 +64,7 @@ void expectSameParams(const NavigationParams& a, const NavigationParams& b) {
 }
 
 TEST(NavigationParams, EveryKeyHasOneSectionAndTheOldOnesAreRenamed) {
-  registerProfileSections();
+  ASSERT_TRUE(kRegistered);
   std::set<std::string> keys;
   size_t n = 0;
   auto add = [&](const std::vector<ParamSpec>& specs) {
@@ -183,6 +188,18 @@ TEST(NavigationParams, BadOldValuesAreReportedAtTheirLine) {
   EXPECT_EQ(issues[0].origin.where(), "t.ini:4");
   EXPECT_EQ(issues[0].key, "k_heading");
   EXPECT_THROW(NavigationParams::fromProfile(p), InputError);
+}
+
+TEST(NavigationParams, AMisspeltOldKeyIsToldItsNewPlace) {
+  const Profile p =
+      Profile::fromText(std::string(kRobot) + "[navigation]\nk_headng = 1\n", "t.ini");
+  const auto issues = p.check();
+  ASSERT_EQ(issues.size(), 1u);
+  EXPECT_NE(issues[0].text().find("t.ini:4: [navigation] k_headng: unknown key (did you mean "
+                                  "'k_heading' (now nav.goal_dwa.k_heading)?); keys of "
+                                  "[navigation]: plugin, "),
+            std::string::npos)
+      << issues[0].text();
 }
 
 }  // namespace

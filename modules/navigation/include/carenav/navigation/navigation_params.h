@@ -125,7 +125,8 @@ struct SafetyParams {
  *  sim_time = 7.0             ; s ([Rosa17, Table 5.1])
  *  ```
  *  Profiles of the previous version set every key in [navigation]; those
- *  keys are still read (navigationRenames()).
+ *  keys are still read under their old names (registerProfileSections()
+ *  declares them renamed).
  */
 struct NavigationParams : DwaParams,
                           UserIntentDwaParams,
