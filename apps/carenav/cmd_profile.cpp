@@ -19,6 +19,8 @@ Profile loadChecked(const ProfileArgs& a) {
   p.applyOverrides(a.sets);
   p.validate();
   loadSensors(p);  // every sensor section reads into its struct
+  // Keys of the previous version: still read, not problems; told once each.
+  for (const auto& note : p.renamedKeys()) std::cerr << "warning: " << note.text() << "\n";
   return p;
 }
 
@@ -48,7 +50,9 @@ void addProfileCommand(CLI::App& app, const GlobalOptions& g) {
   auto* check = cmd->add_subcommand(
       "check",
       "Validate a profile: unknown sections or keys (misspellings), wrong types, out-of-range "
-      "or inconsistent values. Prints every problem with file, line, section and key; exit 2.");
+      "or inconsistent values. Prints every problem with file, line, section and key; exit 2. "
+      "Keys that moved to another section are still read and reported as warnings "
+      "('navigation.k_heading is now nav.goal_dwa.k_heading').");
   addCommon(check, *args);
   check->callback([args, &g] {
     Profile p = loadChecked(*args);

@@ -47,6 +47,27 @@ void ProfileSchemas::add(SectionSchema s) {
   schemas_.push_back(std::move(s));
 }
 
+void ProfileSchemas::addRename(RenamedKey r) {
+  for (auto& existing : renames_)
+    if (existing.old_section == r.old_section && existing.old_key == r.old_key) {
+      existing = std::move(r);  // re-registration replaces
+      return;
+    }
+  renames_.push_back(std::move(r));
+}
+
+void ProfileSchemas::addRenames(const std::string& old_section, const std::string& new_section,
+                                const std::vector<std::string>& keys) {
+  for (const auto& k : keys) addRename({old_section, k, new_section, k});
+}
+
+const RenamedKey* ProfileSchemas::renamedFrom(const std::string& section,
+                                              const std::string& key) const {
+  for (const auto& r : renames_)
+    if (r.old_section == section && r.old_key == key) return &r;
+  return nullptr;
+}
+
 std::vector<const SectionSchema*> ProfileSchemas::candidates(const std::string& section) const {
   std::vector<const SectionSchema*> out;
   for (const auto& s : schemas_)
@@ -126,6 +147,29 @@ std::string resolveBase(const std::string& file, const std::string& base) {
     if (fs::exists(shipped, ec)) return shipped.string();
   }
   return beside.string();
+}
+
+const Profile::Entry* entryIn(const Profile::Section* sec, const std::string& key) {
+  if (sec)
+    for (const auto& [k, e] : *sec)
+      if (k == key) return &e;
+  return nullptr;
+}
+
+/** Layer of a value: its file's place in the base chain (base first), and
+ *  after every file the command line (--set). */
+size_t layerOf(const ValueOrigin& o, const std::vector<std::string>& files) {
+  if (o.file == "--set") return files.size();
+  const auto it = std::find(files.begin(), files.end(), o.file);
+  return static_cast<size_t>(it - files.begin());
+}
+
+/** When an old key and its new name are both set: the new one, unless the
+ *  old one comes from a later layer (a robot profile over a newer base, or
+ *  --set over any file), which overrides as it did before the rename. */
+bool oldKeyWins(const Profile::Entry& old_e, const Profile::Entry& new_e,
+                const std::vector<std::string>& files) {
+  return layerOf(old_e.origin, files) > layerOf(new_e.origin, files);
 }
 
 void setEntry(Profile::Section& sec, const std::string& key, Profile::Entry e) {
@@ -251,6 +295,78 @@ void Profile::applyOverrides(const std::vector<std::string>& assignments) {
   for (const auto& a : assignments) applyOverride(a);
 }
 
+namespace {
+
+/** "unknown key (did you mean 'k'?); keys of [section]: ...". A misspelt
+ *  old key gets its new place: "did you mean 'k_heading' (now
+ *  nav.goal_dwa.k_heading)?". */
+std::string unknownKeyMessage(const std::string& name, const std::string& key,
+                              const SectionSchema& schema, const ProfileSchemas& reg) {
+  std::string best, moved;
+  size_t bestd = 3;
+  for (const auto& s : schema.specs) {
+    const size_t d = editDistance(key, s.key);
+    if (d < bestd) bestd = d, best = s.key;
+  }
+  for (const auto& r : reg.renames()) {
+    if (r.old_section != name) continue;
+    const size_t d = editDistance(key, r.old_key);
+    if (d < bestd) bestd = d, best = r.old_key, moved = " (now " + r.newName() + ")";
+  }
+  std::string m = "unknown key";
+  if (!best.empty()) m += " (did you mean '" + best + "'" + moved + "?)";
+  std::string keys;
+  for (const auto& s : schema.specs) keys += (keys.empty() ? "" : ", ") + s.key;
+  return m + "; keys of [" + name + "]: " + keys;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- renamed keys
+
+std::map<std::string, Profile::Section> Profile::effectiveSections() const {
+  const auto& reg = ProfileSchemas::instance();
+  std::map<std::string, Section> out;
+  for (const auto& [name, sec] : sections_) {
+    Section& o = out[name];
+    for (const auto& [k, e] : sec)
+      if (!reg.renamedFrom(name, k)) o.emplace_back(k, e);
+  }
+  for (const auto& r : reg.renames()) {
+    const Entry* old_e = entryIn(find(r.old_section), r.old_key);
+    if (!old_e) continue;
+    const Entry* new_e = entryIn(find(r.new_section), r.new_key);
+    if (!new_e || oldKeyWins(*old_e, *new_e, files_))
+      setEntry(out[r.new_section], r.new_key, *old_e);
+  }
+  return out;
+}
+
+std::optional<Profile::Section> Profile::effectiveSection(const std::string& name) const {
+  auto all = effectiveSections();
+  auto it = all.find(name);
+  if (it == all.end()) return std::nullopt;
+  return std::move(it->second);
+}
+
+std::vector<ProfileIssue> Profile::renamedKeys() const {
+  std::vector<ProfileIssue> notes;
+  for (const auto& r : ProfileSchemas::instance().renames()) {
+    const Entry* old_e = entryIn(find(r.old_section), r.old_key);
+    if (!old_e) continue;
+    ProfileIssue is{old_e->origin, r.old_section, r.old_key,
+                    r.oldName() + " is now " + r.newName()};
+    if (const Entry* new_e = entryIn(find(r.new_section), r.new_key)) {
+      const bool old_wins = oldKeyWins(*old_e, *new_e, files_);
+      const Entry& w = old_wins ? *old_e : *new_e;
+      is.message += "; both are set, " + (old_wins ? r.oldName() : r.newName()) + " (" +
+                    w.origin.where() + ") wins: " + w.value;
+    }
+    notes.push_back(std::move(is));
+  }
+  return notes;
+}
+
 // ---------------------------------------------------------------- checks
 
 ProfileIssue Profile::issueFor(const std::string& section, const std::string& key, const Entry& e,
@@ -267,7 +383,7 @@ ProfileIssue Profile::issueFor(const std::string& section, const std::string& ke
 std::vector<ProfileIssue> Profile::check() const {
   std::vector<ProfileIssue> issues;
   const auto& reg = ProfileSchemas::instance();
-  for (const auto& [name, sec] : sections_) {
+  for (const auto& [name, sec] : effectiveSections()) {
     const ValueOrigin sec_origin =
         sec.empty() ? ValueOrigin{origin_, 0} : sec.front().second.origin;
     auto cands = reg.candidates(name);
@@ -312,18 +428,8 @@ std::vector<ProfileIssue> Profile::check() const {
       for (const auto& s : schema->specs)
         if (s.key == key) spec = &s;
       if (!spec) {
-        std::string best;
-        size_t bestd = 3;
-        for (const auto& s : schema->specs) {
-          const size_t d = editDistance(key, s.key);
-          if (d < bestd) bestd = d, best = s.key;
-        }
-        std::string m = "unknown key";
-        if (!best.empty()) m += " (did you mean '" + best + "'?)";
-        std::string keys;
-        for (const auto& s : schema->specs) keys += (keys.empty() ? "" : ", ") + s.key;
-        m += "; keys of [" + name + "]: " + keys;
-        issues.push_back({e ? e->origin : sec_origin, name, key, m});
+        issues.push_back(
+            {e ? e->origin : sec_origin, name, key, unknownKeyMessage(name, key, *schema, reg)});
       } else {
         issues.push_back(issueFor(name, key, *e, msg, spec));
       }
@@ -387,7 +493,8 @@ std::string Profile::resolvedText() const {
          << "\n";
     }
   };
-  for (const auto& [name, sec] : sections_) {
+  const auto effective = effectiveSections();
+  for (const auto& [name, sec] : effective) {
     os << "\n[" << name << "]\n";
     auto cands = reg.candidates(name);
     const SectionSchema* schema = cands.empty() ? nullptr : cands.front();
@@ -415,7 +522,7 @@ std::string Profile::resolvedText() const {
   // parameter a command uses is shown. Families ("sensor.*") describe
   // sections a profile adds, and have no defaults of their own.
   for (const auto& schema : reg.all()) {
-    if (schema.name.find('*') != std::string::npos || sections_.count(schema.name)) continue;
+    if (schema.name.find('*') != std::string::npos || effective.count(schema.name)) continue;
     if (!schema.variant_key.empty()) continue;
     os << "\n[" << schema.name << "]\n; not in the profile: " << schema.description
        << ", every key at its default\n";

@@ -30,8 +30,16 @@ double distanceToPath(const std::vector<TPoint2D>& path, double x, double y) {
 
 class GoalDwa final : public LocalPlanner {
  public:
-  GoalDwa(const NavigationParams& p, const RobotParams& r)
-      : p_(p), r_(r), corner_(p.corner_deg > 0 ? mrpt::DEG2RAD(p.corner_deg) : M_PI) {}
+  /** `goal_tolerance` (m) and `goal_tolerance_deg`: when the goal is reached
+   *  ([navigation]). */
+  GoalDwa(const DwaParams& d, const GoalDwaParams& g, double goal_tolerance,
+          double goal_tolerance_deg, const RobotParams& r)
+      : d_(d),
+        g_(g),
+        goal_tol_(goal_tolerance),
+        goal_tol_deg_(goal_tolerance_deg),
+        r_(r),
+        corner_(g.corner_deg > 0 ? mrpt::DEG2RAD(g.corner_deg) : M_PI) {}
   std::string name() const override { return "goal-dwa"; }
   bool needsUserIntent() const override { return false; }
 
@@ -45,67 +53,67 @@ class GoalDwa final : public LocalPlanner {
     if (path.empty()) path.push_back({in.goal->x, in.goal->y});
     const TPoint2D last = path.back();
     const double to_goal = std::hypot(last.x - in.pose.x, last.y - in.pose.y);
-    const Window win = dynamicWindow(in.current, r_, p_);
+    const Window win = dynamicWindow(in.current, r_, d_);
     std::vector<Twist> samples;
     double target_heading;
     bool turn_only = false;
-    if (in.goal && to_goal < p_.goal_tolerance) {
+    if (in.goal && to_goal < goal_tol_) {
       // At the goal: turn to its heading, then stop.
       target_heading = in.goal->phi;
-      if (std::abs(angleDiff(target_heading, in.pose.phi)) < mrpt::DEG2RAD(p_.goal_tolerance_deg)) {
+      if (std::abs(angleDiff(target_heading, in.pose.phi)) < mrpt::DEG2RAD(goal_tol_deg_)) {
         out.ok = true;
         out.mark(PlanStatus::GoalReached);
         return out;
       }
       turn_only = true;
     } else {
-      const TPoint2D t = lookaheadPoint(path, in.pose.x, in.pose.y, p_.lookahead, corner_);
+      const TPoint2D t = lookaheadPoint(path, in.pose.x, in.pose.y, g_.lookahead, corner_);
       target_heading = std::atan2(t.y - in.pose.y, t.x - in.pose.x);
       turn_only =
-          std::abs(angleDiff(target_heading, in.pose.phi)) > mrpt::DEG2RAD(p_.turn_in_place_deg);
+          std::abs(angleDiff(target_heading, in.pose.phi)) > mrpt::DEG2RAD(g_.turn_in_place_deg);
     }
     // Standing still is not a way to the goal: when nothing else is
     // admissible the planner says so and the supervisor stops.
-    for (const Twist& s : sampleWindow(win, p_))
+    for (const Twist& s : sampleWindow(win, d_))
       if ((!turn_only || std::abs(s.v) < 1e-9) && (std::abs(s.v) > 1e-6 || std::abs(s.w) > 1e-6))
         samples.push_back(s);
     if (turn_only) {
       // Slow down first when still moving: v from the window's low end.
       if (samples.empty())
-        for (const Twist& s : sampleWindow(win, p_))
+        for (const Twist& s : sampleWindow(win, d_))
           if (std::abs(s.v - (win.v_lo > 0 ? win.v_lo : win.v_hi)) < 1e-9) samples.push_back(s);
       out.mark(PlanStatus::TurnInPlace);
     }
-    const double cap = p_.clearance_influence;
+    const double cap = d_.clearance_influence;
     auto evaluate = [&](const std::vector<Twist>& candidates) {
       double best = std::numeric_limits<double>::infinity();
       for (const Twist& s : candidates) {
         Trajectory tr =
-            rollout(*in.map, in.pose, s, p_.sim_time, p_.sim_step, cap, p_.obstacle_distance_cap);
+            rollout(*in.map, in.pose, s, d_.sim_time, d_.sim_step, cap, d_.obstacle_distance_cap);
         ++out.evaluated;
         // Admissible: brakes before the first contact, and the supervisor
         // (same footprint, braking model and safe distance) passes it unchanged.
         if (!tr.leaves_map && canBrake(s, tr.time_to_collision, r_, r_.safe_distance) &&
-            brakingScale(*in.map, in.pose, s, r_, p_.sim_step) >= 1.0) {
+            brakingScale(*in.map, in.pose, s, r_, d_.sim_step) >= 1.0) {
           ++out.admissible;
-          const double ts = std::min(p_.score_time, p_.sim_time);
+          const double ts = std::min(g_.score_time, d_.sim_time);
           const TPose2D e = integrateArc(in.pose, s.v, s.w, ts);
           // The heading error after ts, unwrapped: the turn still needed
           // (from the start heading, within +-pi) less the turn made, w ts,
           // which may exceed pi at a fast robot's turn rate. Wrapping it
           // would make a spin past the target look as good as stopping on it.
           double needed;
-          if (in.goal && to_goal < p_.goal_tolerance)
+          if (in.goal && to_goal < goal_tol_)
             needed = angleDiff(target_heading, in.pose.phi);
           else {
-            const TPoint2D t = lookaheadPoint(path, e.x, e.y, p_.lookahead, corner_);
+            const TPoint2D t = lookaheadPoint(path, e.x, e.y, g_.lookahead, corner_);
             needed = angleDiff(std::atan2(t.y - e.y, t.x - e.x), in.pose.phi);
           }
           const double heading_err = std::abs(needed - s.w * ts);
           const double path_dist = distanceToPath(path, e.x, e.y);
           const double speed = r_.v_max > 0 ? (r_.v_max - s.v) / r_.v_max : 0;
-          tr.cost = p_.k_heading * heading_err + p_.k_path * path_dist + p_.k_speed * speed +
-                    p_.k_goal_obs / std::max(std::min(tr.contact_time, p_.sim_time), 1e-3);
+          tr.cost = g_.k_heading * heading_err + g_.k_path * path_dist + g_.k_speed * speed +
+                    g_.k_goal_obs / std::max(std::min(tr.contact_time, d_.sim_time), 1e-3);
           if (tr.cost < best - 1e-12) {
             best = tr.cost;
             out.cmd = s;
@@ -119,7 +127,7 @@ class GoalDwa final : public LocalPlanner {
     if (!out.ok && !turn_only) {
       // Nothing moves forward safely: turn on the spot towards the route.
       std::vector<Twist> turns;
-      for (const Twist& s : sampleWindow(win, p_))
+      for (const Twist& s : sampleWindow(win, d_))
         if (std::abs(s.v) < 1e-9 && std::abs(s.w) > 1e-6) turns.push_back(s);
       evaluate(turns);
       if (out.ok) out.mark(PlanStatus::TurnInPlace, "turn in place (blocked ahead)");
@@ -129,7 +137,9 @@ class GoalDwa final : public LocalPlanner {
   }
 
  private:
-  NavigationParams p_;
+  DwaParams d_;
+  GoalDwaParams g_;
+  double goal_tol_, goal_tol_deg_;
   RobotParams r_;
   double corner_;
 };
@@ -174,7 +184,7 @@ TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, d
 }
 
 std::unique_ptr<LocalPlanner> makeGoalDwa(const NavigationParams& p, const RobotParams& r) {
-  return std::make_unique<GoalDwa>(p, r);
+  return std::make_unique<GoalDwa>(p, p, p.goal_tolerance, p.goal_tolerance_deg, r);
 }
 
 }  // namespace carenav::navigation

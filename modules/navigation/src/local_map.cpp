@@ -284,7 +284,7 @@ bool Footprint::contains(double x, double y) const {
 
 // ---------------------------------------------------------------- cost map
 
-LocalCostmap::LocalCostmap(const NavigationParams& p, const Footprint& footprint)
+LocalCostmap::LocalCostmap(const LocalMapParams& p, const Footprint& footprint)
     : res_(p.resolution),
       decay_(p.cost_decay),
       contact_(std::max(p.resolution * 0.5, p.footprint_padding + p.resolution * 0.5)),

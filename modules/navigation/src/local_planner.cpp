@@ -116,7 +116,7 @@ bool canBrake(const Twist& cmd, double time_to_collision, const RobotParams& rob
   return stop_time / 2 <= available;
 }
 
-Window dynamicWindow(const Twist& cur, const RobotParams& r, const NavigationParams& p) {
+Window dynamicWindow(const Twist& cur, const RobotParams& r, const DwaParams& p) {
   Window w;
   const double dv = r.acc_v * p.window_time, dw = r.acc_w * p.window_time;
   w.v_lo = std::max(r.v_min, cur.v - dv);
@@ -140,7 +140,7 @@ void linspace(double lo, double hi, int n, std::vector<double>& out) {
 
 }  // namespace
 
-std::vector<Twist> sampleWindow(const Window& win, const NavigationParams& p,
+std::vector<Twist> sampleWindow(const Window& win, const DwaParams& p,
                                 const std::vector<Twist>& extra) {
   std::vector<double> vs, ws;
   if (win.v_hi > 0) linspace(std::max(win.v_lo, 0.0), win.v_hi, p.v_samples, vs);

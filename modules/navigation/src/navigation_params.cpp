@@ -20,38 +20,82 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
           .integer("v_samples", &P::v_samples, "", 2, 100,
                    "samples of v per direction ([Rosa17]: 12 forward, 12 backward)")
           .integer("w_samples", &P::w_samples, "", 2, 100, "samples of w across the window")
-          .real("k_s", &P::k_s, "", 0, 100, "user-intent DWA: weight of the summed cell cost")
-          .real("k_0", &P::k_0, "m", 0, 100,
-                "user-intent DWA: weight of 1 / dist(v, w), the free distance along the arc")
-          .real("k_1", &P::k_1, "", 0, 100,
-                "user-intent DWA: penalty for driving against the user's direction")
-          .real("k_2", &P::k_2, "", 0, 100, "user-intent DWA: weight of the end-pose distance")
           .real("clearance_influence", &P::clearance_influence, "m", 0.01, 10,
                 "lateral clearance beyond this is not told apart")
           .real("obstacle_distance_cap", &P::obstacle_distance_cap, "m", 0.1, 100,
                 "arcs are checked at least this far, even slow ones; farther obstacles "
-                "do not count (user-intent DWA)")
-          .real("k_heading", &P::k_heading, "1/rad", 0, 100, "goal DWA: heading error weight")
-          .real("k_path", &P::k_path, "1/m", 0, 100, "goal DWA: distance-to-route weight")
-          .real("k_speed", &P::k_speed, "", 0, 100, "goal DWA: slowness weight")
+                "do not count (dynamic window planners)")
+          .real("plan_clearance", &P::plan_clearance, "m", 0, 5,
+                "global route: extra clearance beyond the robot's inscribed radius")
+          .real("plan_cost_weight", &P::plan_cost_weight, "", 0, 100,
+                "global route: extra cost near obstacles (keeps routes central)")
+          .real("passage_margin", &P::passage_margin, "m", 0, 5,
+                "global route: cells closer than the robot's radius plus this to an obstacle "
+                "form a narrow passage (a doorway), crossed straight")
+          .real("passage_approach", &P::passage_approach, "m", 0.1, 5,
+                "global route: waypoints this far before and after a passage, on its axis")
+          .real("goal_tolerance", &P::goal_tolerance, "m", 0.01, 10,
+                "goal reached within this distance ([Conceicao16]: 0.5)")
+          .real("goal_tolerance_deg", &P::goal_tolerance_deg, "deg", 0.1, 180,
+                "heading tolerance at the goal ([Conceicao16]: 0.05 rad)");
+  return t;
+}
+
+const ParamTable<UserIntentDwaParams>& UserIntentDwaParams::table() {
+  using P = UserIntentDwaParams;
+  static const auto t =
+      ParamTable<P>()
+          .real("k_s", &P::k_s, "", 0, 100, "weight of the summed cell cost")
+          .real("k_0", &P::k_0, "m", 0, 100,
+                "weight of 1 / dist(v, w), the free distance along the arc")
+          .real("k_1", &P::k_1, "", 0, 100, "penalty for driving against the user's direction")
+          .real("k_2", &P::k_2, "", 0, 100, "weight of the end-pose distance");
+  return t;
+}
+
+const ParamTable<GoalDwaParams>& GoalDwaParams::table() {
+  using P = GoalDwaParams;
+  static const auto t =
+      ParamTable<P>()
+          .real("k_heading", &P::k_heading, "1/rad", 0, 100, "heading error weight")
+          .real("k_path", &P::k_path, "1/m", 0, 100, "distance-to-route weight")
+          .real("k_speed", &P::k_speed, "", 0, 100, "slowness weight")
           .real("k_goal_obs", &P::k_goal_obs, "s", 0, 100,
-                "goal DWA: weight of 1 / the time to the nearest obstacle on the arc")
+                "weight of 1 / the time to the nearest obstacle on the arc")
           .real("turn_in_place_deg", &P::turn_in_place_deg, "deg", 0, 180,
-                "goal DWA: turn on the spot when the waypoint is further off")
+                "turn on the spot when the waypoint is further off")
           .real("score_time", &P::score_time, "s", 0.1, 30,
-                "goal DWA: critics are taken at the pose reached after this time")
+                "critics are taken at the pose reached after this time")
           .real("lookahead", &P::lookahead, "m", 0.1, 10,
-                "goal DWA: the waypoint is this far along the route")
+                "the waypoint is this far along the route")
           .real("corner_deg", &P::corner_deg, "deg", 0, 180,
-                "goal-dwa: the look-ahead does not cut a route vertex turning more than this "
+                "the look-ahead does not cut a route vertex turning more than this "
                 "(the approach point of a doorway: the robot enters on its axis); 0: cut every "
-                "corner")
+                "corner");
+  return t;
+}
+
+const ParamTable<LocalMapParams>& LocalMapParams::table() {
+  using P = LocalMapParams;
+  static const auto t =
+      ParamTable<P>()
           .real("local_size", &P::local_size, "m", 1, 50, "side of the robot-centred local grid")
           .real("resolution", &P::resolution, "m", 0.01, 0.5, "cell size of the local grid")
           .real("obstacle_persistence", &P::obstacle_persistence, "s", 0, 600,
                 "seen obstacles are remembered this long ([Puente14, App. Table I]: 5)")
           .real("memory_radius", &P::memory_radius, "m", 0.5, 50,
                 "remembered obstacles farther from the robot are dropped")
+          .real("cost_decay", &P::cost_decay, "m", 0.01, 5,
+                "cell cost falls from 100 to 0 over this distance to an obstacle")
+          .real("footprint_padding", &P::footprint_padding, "m", 0, 1,
+                "closer than this to an obstacle counts as contact (sensing and control error)");
+  return t;
+}
+
+const ParamTable<PeopleParams>& PeopleParams::table() {
+  using P = PeopleParams;
+  static const auto t =
+      ParamTable<P>()
           .real("predict_speed", &P::predict_speed, "m/s", 0, 3,
                 "moving obstacles (people) are grown by predict_speed x predict_time; 0: off")
           .real("predict_time", &P::predict_time, "s", 0, 5,
@@ -77,43 +121,70 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
                    "depth: at least this many neighbouring cells must move in together (a body "
                    "stepping in, not a flickering edge)")
           .real("track_gate", &P::track_gate, "m", 0.05, 5,
-                "a moving cluster continues the track whose predicted centroid is this close")
-          .real("cost_decay", &P::cost_decay, "m", 0.01, 5,
-                "cell cost falls from 100 to 0 over this distance to an obstacle")
-          .real("footprint_padding", &P::footprint_padding, "m", 0, 1,
-                "closer than this to an obstacle counts as contact (sensing and control error)")
-          .real("plan_clearance", &P::plan_clearance, "m", 0, 5,
-                "global route: extra clearance beyond the robot's inscribed radius")
-          .real("plan_cost_weight", &P::plan_cost_weight, "", 0, 100,
-                "global route: extra cost near obstacles (keeps routes central)")
-          .real("passage_margin", &P::passage_margin, "m", 0, 5,
-                "global route: cells closer than the robot's radius plus this to an obstacle "
-                "form a narrow passage (a doorway), crossed straight")
-          .real("passage_approach", &P::passage_approach, "m", 0.1, 5,
-                "global route: waypoints this far before and after a passage, on its axis")
-          .real("goal_tolerance", &P::goal_tolerance, "m", 0.01, 10,
-                "goal reached within this distance ([Conceicao16]: 0.5)")
-          .real("goal_tolerance_deg", &P::goal_tolerance_deg, "deg", 0.1, 180,
-                "heading tolerance at the goal ([Conceicao16]: 0.05 rad)")
-          .real("sensor_timeout", &P::sensor_timeout, "s", 0.01, 10,
-                "safety: stop when the newest scan is older")
-          .real("odom_timeout", &P::odom_timeout, "s", 0.01, 10,
-                "safety: stop when the newest odometry is older")
-          .real("intent_timeout", &P::intent_timeout, "s", 0.01, 10,
-                "safety (walker): stop when the user's command is older")
-          .real("intent_deadband", &P::intent_deadband, "", 0, 1,
-                "safety (walker): user commands below this (m/s, rad/s) mean stop");
+                "a moving cluster continues the track whose predicted centroid is this close");
   return t;
 }
 
+const ParamTable<SafetyParams>& SafetyParams::table() {
+  using P = SafetyParams;
+  static const auto t = ParamTable<P>()
+                            .real("sensor_timeout", &P::sensor_timeout, "s", 0.01, 10,
+                                  "stop when the newest scan is older")
+                            .real("odom_timeout", &P::odom_timeout, "s", 0.01, 10,
+                                  "stop when the newest odometry is older")
+                            .real("intent_timeout", &P::intent_timeout, "s", 0.01, 10,
+                                  "walker: stop when the user's command is older")
+                            .real("intent_deadband", &P::intent_deadband, "", 0, 1,
+                                  "walker: user commands below this (m/s, rad/s) mean stop");
+  return t;
+}
+
+namespace {
+/** The keys of T's section: each was a key of [navigation] under the same name. */
+template <class T>
+std::vector<std::string> keysOf() {
+  std::vector<std::string> keys;
+  for (const auto& spec : T::table().specs()) keys.push_back(spec.key);
+  return keys;
+}
+}  // namespace
+
+NavigationParams NavigationParams::fromProfile(const Profile& profile) {
+  NavigationParams p = profile.section<NavigationParams>("navigation");
+  static_cast<UserIntentDwaParams&>(p) =
+      profile.section<UserIntentDwaParams>("nav.user_intent_dwa");
+  static_cast<GoalDwaParams&>(p) = profile.section<GoalDwaParams>("nav.goal_dwa");
+  static_cast<LocalMapParams&>(p) = profile.section<LocalMapParams>("nav.local_map");
+  static_cast<PeopleParams&>(p) = profile.section<PeopleParams>("nav.people");
+  static_cast<SafetyParams&>(p) = profile.section<SafetyParams>("nav.safety");
+  return p;
+}
+
 void registerProfileSections() {
-  ProfileSchemas::instance().add(SectionSchema::of(
+  auto& reg = ProfileSchemas::instance();
+  reg.add(SectionSchema::of(
       NavigationParams::table(), "navigation",
-      "local planners (dynamic window plugins), obstacle memory, global route, safety"));
-  ProfileSchemas::instance().add(SectionSchema::of(
+      "navigation: local planner plugin, trajectory rollout and dynamic window, global route, "
+      "goal tolerance"));
+  reg.add(SectionSchema::of(UserIntentDwaParams::table(), "nav.user_intent_dwa",
+                            "user-intent-dwa local planner: cost weights of [Rosa17, Eq. 4.10]"));
+  reg.add(SectionSchema::of(GoalDwaParams::table(), "nav.goal_dwa",
+                            "goal-dwa local planner: critics, look-ahead and corners"));
+  reg.add(SectionSchema::of(LocalMapParams::table(), "nav.local_map",
+                            "local cost map and obstacle memory"));
+  reg.add(SectionSchema::of(PeopleParams::table(), "nav.people",
+                            "moving obstacles (people): growth, tracking, predicted lanes"));
+  reg.add(SectionSchema::of(SafetyParams::table(), "nav.safety",
+                            "safety supervisor: stale data and user-command timeouts"));
+  reg.addRenames("navigation", "nav.user_intent_dwa", keysOf<UserIntentDwaParams>());
+  reg.addRenames("navigation", "nav.goal_dwa", keysOf<GoalDwaParams>());
+  reg.addRenames("navigation", "nav.local_map", keysOf<LocalMapParams>());
+  reg.addRenames("navigation", "nav.people", keysOf<PeopleParams>());
+  reg.addRenames("navigation", "nav.safety", keysOf<SafetyParams>());
+  reg.add(SectionSchema::of(
       MrptPtgParams::table(), "nav.mrpt_ptg",
       "mrpt-ptg local planner: MRPT's TP-space reactive navigation (PTGs, holonomic method)"));
-  ProfileSchemas::instance().add(SectionSchema::of(
+  reg.add(SectionSchema::of(
       RecoveryParams::table(), "nav.recovery",
       "recovery behaviours of goal robots: back out along the recent path, turn, wait, "
       "replan, give up"));

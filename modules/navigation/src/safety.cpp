@@ -20,7 +20,7 @@ const char* safetyActionName(SafetyAction a) {
 
 double SafetySupervisor::timeToCollision(const LocalCostmap& map, const TPose2D& pose,
                                          const Twist& cmd, double horizon) const {
-  const Trajectory tr = rollout(map, pose, cmd, horizon, p_.sim_step / 2, 0.0);
+  const Trajectory tr = rollout(map, pose, cmd, horizon, sim_step_ / 2, 0.0);
   if (tr.collides) return tr.time_to_collision;
   if (tr.leaves_map) return tr.time_to_collision;  // unknown beyond: treat as an obstacle
   return std::numeric_limits<double>::infinity();
@@ -109,7 +109,7 @@ SafetyDecision SafetySupervisor::apply(const SafetyInput& in) const {
     return d;
   }
   const double margin = in.plan.margin >= 0 ? in.plan.margin : r_.safe_distance;
-  const double s = brakingScale(*in.map, in.pose, c, r_, p_.sim_step, margin);
+  const double s = brakingScale(*in.map, in.pose, c, r_, sim_step_, margin);
   if (s <= 1e-3) return stop(SafetyRule::CannotBrake, "cannot brake before the obstacle ahead");
   d.cmd = {c.v * s, c.w * s};
   d.action = s < 1 ? SafetyAction::Slow : SafetyAction::Pass;

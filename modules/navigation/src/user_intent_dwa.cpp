@@ -11,8 +11,10 @@ namespace {
 
 class UserIntentDwa final : public LocalPlanner {
  public:
-  UserIntentDwa(const NavigationParams& p, const RobotParams& r)
-      : p_(p), r_(r), v_scale_(std::max({r.v_max, -r.v_min, 1e-6})) {}
+  /** `deadband`: user commands below it mean stop ([nav.safety] intent_deadband). */
+  UserIntentDwa(const DwaParams& d, const UserIntentDwaParams& k, double deadband,
+                const RobotParams& r)
+      : d_(d), k_(k), deadband_(deadband), r_(r), v_scale_(std::max({r.v_max, -r.v_min, 1e-6})) {}
   std::string name() const override { return "user-intent-dwa"; }
   bool needsUserIntent() const override { return true; }
 
@@ -24,22 +26,22 @@ class UserIntentDwa final : public LocalPlanner {
     }
     const Twist u = *in.user;
     // The user lets go: stop (braking is always reachable).
-    if (std::abs(u.v) < p_.intent_deadband && std::abs(u.w) < p_.intent_deadband) {
+    if (std::abs(u.v) < deadband_ && std::abs(u.w) < deadband_) {
       out.ok = true;
       out.mark(PlanStatus::UserStopped);
       return out;
     }
-    const Window win = dynamicWindow(in.current, r_, p_);
+    const Window win = dynamicWindow(in.current, r_, d_);
     // The user's own command is a candidate, so that on a free path it
     // passes unchanged.
-    const auto samples = sampleWindow(win, p_, {u});
+    const auto samples = sampleWindow(win, d_, {u});
     // Where the user's command would take the walker (d_p of Eq. 4.10).
-    const TPose2D intended = integrateArc(in.pose, u.v, u.w, p_.sim_time);
-    const double cap = p_.clearance_influence;
+    const TPose2D intended = integrateArc(in.pose, u.v, u.w, d_.sim_time);
+    const double cap = d_.clearance_influence;
     double best = std::numeric_limits<double>::infinity();
     for (const Twist& s : samples) {
       Trajectory tr =
-          rollout(*in.map, in.pose, s, p_.sim_time, p_.sim_step, cap, p_.obstacle_distance_cap);
+          rollout(*in.map, in.pose, s, d_.sim_time, d_.sim_step, cap, d_.obstacle_distance_cap);
       ++out.evaluated;
       // Admissible (Eq. 4.1): the walker can brake safe_distance before the
       // first contact (the margin the safety supervisor enforces, so that
@@ -60,13 +62,13 @@ class UserIntentDwa final : public LocalPlanner {
         // than steering around an obstacle merely because of the units.
         const double mismatch =
             std::hypot((s.v - u.v) / v_scale_, (s.w - u.w) / std::max(r_.w_max, 1e-6));
-        const double c_obs = std::max(std::min(tr.free_distance, p_.obstacle_distance_cap), 1e-3);
+        const double c_obs = std::max(std::min(tr.free_distance, d_.obstacle_distance_cap), 1e-3);
         // "Direction differs from the user's": driving backwards while the
         // user pushes forwards, or the reverse.
         const bool reversed = (s.v > 1e-6 && u.v < -1e-6) || (s.v < -1e-6 && u.v > 1e-6);
         const double d_p = std::hypot(tr.end.x - intended.x, tr.end.y - intended.y);
-        tr.cost = mismatch + p_.k_s * tr.occupancy + p_.k_0 / c_obs + (reversed ? p_.k_1 : 0.0) +
-                  p_.k_2 * d_p / (1 + d_p);
+        tr.cost = mismatch + k_.k_s * tr.occupancy + k_.k_0 / c_obs + (reversed ? k_.k_1 : 0.0) +
+                  k_.k_2 * d_p / (1 + d_p);
         if (tr.cost < best - 1e-12) {
           best = tr.cost;
           out.cmd = s;
@@ -80,7 +82,9 @@ class UserIntentDwa final : public LocalPlanner {
   }
 
  private:
-  NavigationParams p_;
+  DwaParams d_;
+  UserIntentDwaParams k_;
+  double deadband_;
   RobotParams r_;
   double v_scale_;
 };
@@ -88,7 +92,7 @@ class UserIntentDwa final : public LocalPlanner {
 }  // namespace
 
 std::unique_ptr<LocalPlanner> makeUserIntentDwa(const NavigationParams& p, const RobotParams& r) {
-  return std::make_unique<UserIntentDwa>(p, r);
+  return std::make_unique<UserIntentDwa>(p, p, p.intent_deadband, r);
 }
 
 }  // namespace carenav::navigation

@@ -2,8 +2,8 @@
 #include <carenav/common/errors.h>
 #include <carenav/localization/localizer.h>
 #include <carenav/navigation/mrpt_ptg.h>
-#include <carenav/runtime/session.h>
 #include <carenav/perception/pipeline.h>
+#include <carenav/runtime/session.h>
 
 #include <unistd.h>
 #include <chrono>
@@ -22,7 +22,7 @@ SessionSetup sessionSetup(const std::string& profile_path, const std::vector<std
   configureMrptPtg(s.profile);  // [nav.mrpt_ptg] for the mrpt-ptg plugin
   s.robot = s.profile.section<RobotParams>("robot");
   s.sensors = loadSensors(s.profile);
-  s.nav = s.profile.section<NavigationParams>("navigation");
+  s.nav = NavigationParams::fromProfile(s.profile);  // [navigation] and [nav.*]
   if (!plugin.empty()) s.nav.plugin = plugin;
   return s;
 }

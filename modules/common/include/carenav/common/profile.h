@@ -7,6 +7,7 @@
 
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -67,6 +68,16 @@ struct SectionSchema {
   }
 };
 
+/** A key that moved to another section (and maybe another name). Profiles
+ *  written before the move still work: the old key is read as the new one,
+ *  unless the new one is set too (the new one wins), and `profile check`
+ *  reports it as renamed. */
+struct RenamedKey {
+  std::string old_section, old_key, new_section, new_key;
+  std::string oldName() const { return old_section + "." + old_key; }
+  std::string newName() const { return new_section + "." + new_key; }
+};
+
 /** Every section a profile may hold. Modules add theirs at start-up
  *  (common's own sections are always present). */
 class ProfileSchemas {
@@ -77,9 +88,18 @@ class ProfileSchemas {
   /** Schemas whose name matches the section (all variants of a family). */
   std::vector<const SectionSchema*> candidates(const std::string& section) const;
 
+  /** Declares that [old_section] `key` is now [new_section] `key`, for each key. */
+  void addRenames(const std::string& old_section, const std::string& new_section,
+                  const std::vector<std::string>& keys);
+  void addRename(RenamedKey r);
+  const std::vector<RenamedKey>& renames() const { return renames_; }
+  /** The rename of [section] key, or nullptr when it was not renamed. */
+  const RenamedKey* renamedFrom(const std::string& section, const std::string& key) const;
+
  private:
   ProfileSchemas();
   std::vector<SectionSchema> schemas_;
+  std::vector<RenamedKey> renames_;
 };
 
 /** Where a value came from. */
@@ -125,6 +145,10 @@ class Profile {
   std::vector<ProfileIssue> check() const;
   /** Throws InputError listing every problem of check(). */
   void validate() const;
+  /** Old keys set in the profile (see RenamedKey), one note each:
+   *  "navigation.k_heading is now nav.goal_dwa.k_heading", plus, when the new
+   *  key is set too, which value wins. Not problems: check() accepts them. */
+  std::vector<ProfileIssue> renamedKeys() const;
 
   /** The named section read into T (defaults for absent keys). Throws
    *  InputError naming file, line, section, key and the allowed range. */
@@ -134,10 +158,10 @@ class Profile {
   }
   template <class T>
   T section(const std::string& name, const ParamTable<T>& table, T obj = T{}) const {
-    auto it = sections_.find(name);
-    if (it == sections_.end()) return obj;
+    const auto sec = effectiveSection(name);
+    if (!sec) return obj;
     std::string problems;  // every bad key, not only the first
-    for (const auto& [key, e] : it->second) {
+    for (const auto& [key, e] : *sec) {
       try {
         table.set(obj, key, e.value);
       } catch (const ParamValueError& err) {
@@ -153,6 +177,10 @@ class Profile {
   }
 
   bool hasSection(const std::string& name) const { return sections_.count(name) > 0; }
+  /** The section as its readers see it: renamed keys moved from their old
+   *  section to the new one (the new key wins when both are set); nullopt
+   *  when neither the section nor any old key of it is in the profile. */
+  std::optional<Section> effectiveSection(const std::string& name) const;
   /** Section names in sorted order. */
   std::vector<std::string> sectionNames() const;
   std::vector<std::string> sectionsWithPrefix(const std::string& prefix) const;
@@ -178,6 +206,9 @@ class Profile {
                         std::vector<std::string>& chain);
   ProfileIssue issueFor(const std::string& section, const std::string& key, const Entry& e,
                         const std::string& message, const ParamSpec* spec) const;
+
+  /** Every section as its readers see it (effectiveSection of each). */
+  std::map<std::string, Section> effectiveSections() const;
 
   std::map<std::string, Section> sections_;
   std::string origin_;

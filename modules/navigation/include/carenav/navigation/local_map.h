@@ -152,7 +152,7 @@ struct FootprintCheck {
  *  occupied), and footprint queries. */
 class LocalCostmap {
  public:
-  LocalCostmap(const NavigationParams& p, const Footprint& footprint);
+  LocalCostmap(const LocalMapParams& p, const Footprint& footprint);
   /** Rebuilds around `centre` from obstacle points (world frame) and,
    *  optionally, the occupied cells of a static map in the same frame
    *  (cells with occupancy probability above `static_occupied`). */

@@ -110,11 +110,11 @@ struct PlannerOutput {
 struct Window {
   double v_lo = 0, v_hi = 0, w_lo = 0, w_hi = 0;
 };
-Window dynamicWindow(const Twist& current, const RobotParams& robot, const NavigationParams& p);
+Window dynamicWindow(const Twist& current, const RobotParams& robot, const DwaParams& p);
 /** Samples of the window: v_samples forward and v_samples backward (when
  *  the window reaches below zero), w_samples across, always 0 and the
  *  window's bounds; plus `extra` (clamped into the window). */
-std::vector<Twist> sampleWindow(const Window& w, const NavigationParams& p,
+std::vector<Twist> sampleWindow(const Window& w, const DwaParams& p,
                                 const std::vector<Twist>& extra = {});
 
 /** A local method. */

@@ -80,7 +80,11 @@ struct SafetyDecision {
  *  6. never exceed the robot's velocity limits. */
 class SafetySupervisor {
  public:
-  SafetySupervisor(const NavigationParams& p, const RobotParams& robot) : p_(p), r_(robot) {}
+  /** `rollout`: the step of the braking checks (sim_step). */
+  SafetySupervisor(const SafetyParams& p, const DwaParams& rollout, const RobotParams& robot)
+      : p_(p), sim_step_(rollout.sim_step), r_(robot) {}
+  SafetySupervisor(const NavigationParams& p, const RobotParams& robot)
+      : SafetySupervisor(p, p, robot) {}
   SafetyDecision apply(const SafetyInput& in) const;
   /** s along the arc of `cmd` from `pose` until the footprint touches an
    *  obstacle (or leaves the map), looking `horizon` seconds ahead;
@@ -89,7 +93,8 @@ class SafetySupervisor {
                          double horizon) const;
 
  private:
-  NavigationParams p_;
+  SafetyParams p_;
+  double sim_step_;
   RobotParams r_;
 };
 
