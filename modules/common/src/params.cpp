@@ -1,4 +1,5 @@
 #include <carenav/common/params.h>
+#include <carenav/common/text.h>
 
 #include <cerrno>
 #include <cmath>
@@ -17,21 +18,15 @@ std::string trim(const std::string& s) {
 
 std::string formatReal(double v) {
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
+  return formatGeneral(v, 10);
 }
 
 double parseReal(const std::string& text) {
   const std::string t = trim(text);
   if (t.empty()) throw ParamValueError("empty value, expected a number");
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(t.c_str(), &end);
-  if (end != t.c_str() + t.size() || errno == ERANGE) throw ParamValueError("not a number");
-  if (!std::isfinite(v)) throw ParamValueError("not a finite number");
-  return v;
+  if (const auto v = parseNumber(t)) return *v;
+  if (parseNumber(t, NonFinite::Allow)) throw ParamValueError("not a finite number");
+  throw ParamValueError("not a number");
 }
 
 long parseInteger(const std::string& text) {

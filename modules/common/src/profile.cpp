@@ -1,4 +1,5 @@
 #include <carenav/common/data_dir.h>
+#include <carenav/common/file.h>
 #include <carenav/common/profile.h>
 #include <carenav/common/robot.h>
 
@@ -119,14 +120,8 @@ std::string stripInlineComment(const std::string& v) {
 }
 
 std::string readFileOrThrow(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path + ": profile not found (no such file)");
-  if (fs::is_directory(path, ec)) throw InputError(path + ": is a directory, not a profile");
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path + ": cannot open the profile for reading");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
+  return readWholeFile(path, {"profile not found (no such file)", "is a directory, not a profile",
+                              "cannot open the profile for reading", "a profile"});
 }
 
 /** Longest chain of `base` profiles read (the shipped ones use 2); longer is

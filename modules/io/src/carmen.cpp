@@ -1,6 +1,7 @@
 #include <carenav/common/errors.h>
 #include <carenav/common/json.h>
 #include <carenav/common/progress.h>
+#include <carenav/common/text.h>
 #include <carenav/io/carmen.h>
 #include <carenav/io/trajectory.h>
 
@@ -207,11 +208,7 @@ std::string printable(std::string_view t) {
   return s;
 }
 
-std::string fmtLimit(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", v);
-  return b;
-}
+std::string fmtLimit(double v) { return formatGeneral(v); }
 
 // ---------------------------------------------------------------------------
 // Field parsing with messages that name the file, line, message and field.
@@ -362,17 +359,9 @@ void writeObject(mrpt::io::CFileGZOutputStream& out, const mrpt::serialization::
   arch << o;
 }
 
-std::string fmtTime(double t) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.6f", t);
-  return b;
-}
+std::string fmtTime(double t) { return formatFixed(t, 6); }
 
-std::string fmtNumber(double v, int decimals) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*f", decimals, v);
-  return b;
-}
+std::string fmtNumber(double v, int decimals) { return formatFixed(v, decimals); }
 
 std::string joinCounts(const std::map<std::string, uint64_t>& m) {
   std::string s;

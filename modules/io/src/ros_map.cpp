@@ -1,6 +1,8 @@
 // ROS map_server maps: the YAML description, PGM/PNG images, and the
 // pixel-to-cell rules of map_server's loader and map_saver.
 #include <carenav/common/errors.h>
+#include <carenav/common/file.h>
+#include <carenav/common/text.h>
 #include <carenav/common/yaml.h>
 #include <carenav/io/map_io.h>
 
@@ -81,26 +83,19 @@ std::map<std::string, YamlValue> parseFlatYaml(const std::string& path, const st
 }
 
 bool parseDouble(const std::string& s, double& out) {
-  if (s.empty()) return false;
-  const char* b = s.c_str();
-  char* e = nullptr;
-  errno = 0;
-  out = std::strtod(b, &e);
-  return e != b && *e == '\0' && errno != ERANGE && std::isfinite(out);
+  const auto v = parseNumber(s);
+  if (v) out = *v;
+  return v.has_value();
 }
 
 // ------------------------------------------------------------ images
 
-std::string readWholeFile(const std::string& path, const char* what) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path + ": no such file");
-  if (fs::is_directory(path, ec))
-    throw InputError(path + ": is a folder, expected " + std::string(what));
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path + ": cannot open (permissions?)");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
+/** The bytes of a map file; `what` names it in messages ("an image"). */
+std::string readMapFile(const std::string& path, const std::string& what,
+                        std::uintmax_t max_bytes) {
+  return readWholeFile(
+      path, {"no such file", "is a folder, expected " + what, "cannot open (permissions?)", what},
+      max_bytes);
 }
 
 /** Refuses an image larger than kMaxImageSide per side or kMaxImagePixels in
@@ -282,7 +277,7 @@ double yamlNumber(const std::map<std::string, YamlValue>& y, const std::string& 
 
 RosMapYaml readRosMapYaml(const std::string& yaml_path) {
   const YamlError err(yaml_path);
-  const std::string text = readWholeFile(yaml_path, "a ROS map YAML file");
+  const std::string text = readMapFile(yaml_path, "a ROS map YAML file", kMaxTextFileBytes);
   if (yaml::isBlank(text))
     err.file(std::string(text.empty() ? "empty file" : "empty file (only blanks and comments)") +
              ", expected a ROS map_server YAML (image, resolution, origin)");
@@ -373,7 +368,8 @@ RosMapYaml readRosMapYaml(const std::string& yaml_path) {
 }
 
 GreyImage readImageGrey(const std::string& path) {
-  const std::string data = readWholeFile(path, "an image");
+  // At most 16-bit RGB pixels of the largest image accepted, plus a header.
+  const std::string data = readMapFile(path, "an image", 6 * kMaxImagePixels + 4096);
   if (data.empty()) throw InputError(path + ": empty file, expected an image");
   const std::string ext = toLower(fs::path(path).extension().string());
   const bool pnm_ext = ext == ".pgm" || ext == ".ppm" || ext == ".pnm";

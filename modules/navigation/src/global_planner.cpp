@@ -27,7 +27,8 @@ GlobalPlanner::GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double 
   const auto d2 = squaredDistanceTransform(free_, nx_, ny_);
   dist_.resize(d2.size());
   for (size_t i = 0; i < d2.size(); ++i)
-    dist_[i] = std::isinf(d2[i]) ? 1e6f : static_cast<float>(std::sqrt(d2[i]) * res_);
+    dist_[i] =
+        std::isinf(d2[i]) ? 1e6f : static_cast<float>(std::sqrt(static_cast<float>(d2[i])) * res_);
 }
 
 bool GlobalPlanner::isFree(double x, double y) const {

@@ -1,5 +1,6 @@
 // PCD and PLY readers/writers (formats: PCL's PCD v0.7 and Stanford PLY).
 #include <carenav/common/errors.h>
+#include <carenav/common/text.h>
 #include <carenav/perception/cloud.h>
 
 #include <algorithm>
@@ -100,12 +101,9 @@ long toLong(const std::string& path, const std::string& what, const std::string&
 }
 
 double toDouble(const std::string& path, const std::string& where, const std::string& s) {
-  const char* b = s.c_str();
-  char* e = nullptr;
-  const double v = std::strtod(b, &e);
-  if (e == b || *e != 0)
-    throw InputError(path + ": " + where + ": not a number: '" + printable(s) + "'");
-  return v;
+  const auto v = parseNumber(s, NonFinite::Saturate);
+  if (!v) throw InputError(path + ": " + where + ": not a number: '" + printable(s) + "'");
+  return *v;
 }
 
 /** Refuses a declared point count that exceeds the documented limit or that

@@ -1,5 +1,6 @@
 // Rooms and places against the occupancy grid: checks, goals, pictures.
 #include <carenav/common/distance_transform.h>
+#include <carenav/common/text.h>
 #include <carenav/places/places.h>
 
 #include <algorithm>
@@ -99,11 +100,7 @@ bool roomsOverlap(const Room& a, const Room& b, const COccupancyGridMap2D& map) 
   return false;
 }
 
-std::string fmt(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.2f", v);
-  return b;
-}
+std::string fmt(double v) { return formatFixed(v, 2); }
 
 const char* className(CellClass c) {
   return c == CellClass::Occupied ? "occupied" : c == CellClass::Unknown ? "unknown" : "free";

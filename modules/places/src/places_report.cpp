@@ -1,4 +1,5 @@
 #include <carenav/common/json.h>
+#include <carenav/common/text.h>
 #include <carenav/places/places_report.h>
 
 #include <cmath>
@@ -8,11 +9,7 @@ namespace carenav::places {
 
 namespace {
 
-std::string fmt(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.3f", v);
-  return b;
-}
+std::string fmt(double v) { return formatFixed(v, 3); }
 
 /** A name, or null when empty. */
 Json nameOrNull(const std::string& name) { return name.empty() ? Json() : Json(name); }

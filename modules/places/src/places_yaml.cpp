@@ -1,5 +1,6 @@
 // The places file on disk: where it lives beside its map, reading it (the
 // YAML itself is read by places_read.cpp) and writing it atomically.
+#include <carenav/common/file.h>
 #include <carenav/places/places.h>
 
 #include <cerrno>
@@ -69,14 +70,8 @@ std::string placesPathForMap(const std::string& map_path) {
 }
 
 PlacesFile readPlacesFile(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
-  if (std::filesystem::is_directory(path, ec)) throw InputError(path + ": is a directory");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot be read");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
+  const std::string text =
+      readWholeFile(path, {"no such file", "is a directory", "cannot be read", "a places file"});
   if (text.find('\0') != std::string::npos)
     throw InputError(path + ": is a binary file, not a places YAML file");
   return parsePlaces(text, path);

@@ -1,5 +1,6 @@
 // The robot bridge (see bridge.h and docs/navigate.md).
 #include <carenav/common/errors.h>
+#include <carenav/common/text.h>
 #include <carenav/runtime/bridge.h>
 #include <carenav/runtime/line_socket.h>
 
@@ -20,21 +21,14 @@ namespace carenav::navigation {
 namespace {
 
 double number(const std::string& s, const char* what, bool allow_nonfinite = false) {
-  char* end = nullptr;
-  errno = 0;
-  const double d = std::strtod(s.c_str(), &end);
-  if (s.empty() || end != s.c_str() + s.size() || errno == ERANGE ||
-      (!allow_nonfinite && !std::isfinite(d)))
+  const auto d = parseNumber(s, allow_nonfinite ? NonFinite::Allow : NonFinite::Refuse);
+  if (!d)
     throw std::invalid_argument(std::string(what) + " '" + printableText(s, 40) +
                                 "' is not a finite number");
-  return d;
+  return *d;
 }
 
-std::string fmt(double v, int prec = 3) {
-  char b[48];
-  std::snprintf(b, sizeof b, "%.*f", prec, v);
-  return b;
-}
+std::string fmt(double v, int prec = 3) { return formatFixed(v, prec); }
 
 /** A finite number within +-limit (`unit` for the message): odometry of
  *  1e300 m is refused here, naming the bridge line, instead of overflowing

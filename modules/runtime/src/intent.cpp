@@ -1,5 +1,7 @@
 // User intent sources for the live app (see intent.h).
 #include <carenav/common/errors.h>
+#include <carenav/common/file.h>
+#include <carenav/common/text.h>
 #include <carenav/runtime/intent.h>
 #include <carenav/runtime/line_socket.h>
 
@@ -42,11 +44,9 @@ std::vector<std::string> splitCsv(const std::string& line) {
 }
 
 bool toNumber(const std::string& s, double& d) {
-  if (s.empty()) return false;
-  char* end = nullptr;
-  errno = 0;
-  d = std::strtod(s.c_str(), &end);
-  return end == s.c_str() + s.size() && errno != ERANGE && std::isfinite(d);
+  const auto v = parseNumber(s);
+  if (v) d = *v;
+  return v.has_value();
 }
 
 // ---------------------------------------------------------------- script
@@ -314,11 +314,9 @@ std::vector<IntentRow> parseIntentScript(const std::string& text, const std::str
 }
 
 std::vector<IntentRow> readIntentScript(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path + ": cannot open the intent script");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  const std::string text = ss.str();
+  const std::string unreadable = "cannot open the intent script";
+  const std::string text =
+      readWholeFile(path, {unreadable, unreadable, unreadable, "an intent script"});
   if (text.find('\0') != std::string::npos)
     throw InputError(path + ": not a text file (an intent script is CSV 't,v,w')");
   return parseIntentScript(text, path);

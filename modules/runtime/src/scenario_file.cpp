@@ -1,5 +1,7 @@
 // Reading scenario files (docs/navigate.md).
 #include <carenav/common/errors.h>
+#include <carenav/common/file.h>
+#include <carenav/common/text.h>
 #include <carenav/common/yaml.h>
 #include <carenav/runtime/scenario.h>
 
@@ -47,13 +49,9 @@ struct Reader {
   }
   double number(const Node& n, const std::string& what) const {
     if (n.kind != Node::Kind::Scalar || n.quoted) fail(n, what + ": expected a number");
-    errno = 0;
-    char* end = nullptr;
-    const double d = std::strtod(n.scalar.c_str(), &end);
-    if (n.scalar.empty() || end != n.scalar.c_str() + n.scalar.size() || errno == ERANGE ||
-        !std::isfinite(d))
-      fail(n, what + ": '" + n.scalar + "' is not a finite number");
-    return d;
+    const auto d = parseNumber(n.scalar);
+    if (!d) fail(n, what + ": '" + n.scalar + "' is not a finite number");
+    return *d;
   }
   std::string text(const Node& n, const std::string& what) const {
     if (n.kind != Node::Kind::Scalar || n.scalar.empty()) fail(n, what + ": expected text");
@@ -208,11 +206,10 @@ Scenario parseScenario(const std::string& text, const std::string& origin,
 }
 
 Scenario readScenario(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path + ": cannot open the scenario file");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return parseScenario(ss.str(), path, fs::path(path).parent_path().string());
+  const std::string unreadable = "cannot open the scenario file";
+  const std::string text =
+      readWholeFile(path, {unreadable, unreadable, unreadable, "a scenario file"});
+  return parseScenario(text, path, fs::path(path).parent_path().string());
 }
 
 }  // namespace carenav::navigation

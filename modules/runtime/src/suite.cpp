@@ -1,6 +1,7 @@
 #include <carenav/common/data_dir.h>
 #include <carenav/common/errors.h>
 #include <carenav/common/json.h>
+#include <carenav/common/text.h>
 #include <carenav/runtime/suite.h>
 
 #include <sys/wait.h>
@@ -165,12 +166,7 @@ std::vector<RunMetrics> runSuite(const std::vector<Scenario>& scenarios,
 
 namespace {
 
-std::string cell(double v, int prec = 2) {
-  if (std::isnan(v)) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.*f", prec, v);
-  return b;
-}
+std::string cell(double v, int prec = 2) { return std::isnan(v) ? "-" : formatFixed(v, prec); }
 
 }  // namespace
 

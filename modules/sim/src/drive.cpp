@@ -1,4 +1,5 @@
 #include <carenav/common/errors.h>
+#include <carenav/common/text.h>
 #include <carenav/io/number_table.h>
 #include <carenav/sim/drive.h>
 
@@ -16,14 +17,9 @@ std::vector<double> numbers(const std::string& text, const std::string& what) {
   std::string tok;
   std::stringstream ss(text);
   while (std::getline(ss, tok, ',')) {
-    const char* s = tok.c_str();
-    char* end = nullptr;
-    errno = 0;
-    const double v = std::strtod(s, &end);
-    while (end && *end == ' ') ++end;
-    if (tok.empty() || end == s || *end != '\0' || errno == ERANGE || !std::isfinite(v))
-      throw InputError(what + ": '" + tok + "' is not a number (in '" + text + "')");
-    out.push_back(v);
+    const auto v = parseNumber(tok.substr(0, tok.find_last_not_of(' ') + 1));  // blanks after it
+    if (!v) throw InputError(what + ": '" + tok + "' is not a number (in '" + text + "')");
+    out.push_back(*v);
   }
   if (!text.empty() && text.back() == ',')
     throw InputError(what + ": missing number after ',' in '" + text + "'");

@@ -1,3 +1,5 @@
+#include <carenav/common/file.h>
+#include <carenav/common/text.h>
 #include <carenav/io/map_io.h>
 #include <carenav/sim/world.h>
 
@@ -216,13 +218,9 @@ struct Reader {
 
   double number(const Node& n, const std::string& what) const {
     if (n.kind != Node::Kind::Scalar || n.quoted) fail(n.line, what + ": expected a number");
-    const char* s = n.scalar.c_str();
-    char* end = nullptr;
-    errno = 0;
-    const double v = std::strtod(s, &end);
-    if (end == s || *end != '\0' || errno == ERANGE || !std::isfinite(v))
-      fail(n.line, what + ": '" + n.scalar + "' is not a number");
-    return v;
+    const auto v = parseNumber(n.scalar);
+    if (!v) fail(n.line, what + ": '" + n.scalar + "' is not a number");
+    return *v;
   }
   double number(const Node& n, const std::string& what, double lo, double hi) const {
     const double v = number(n, what);
@@ -373,14 +371,8 @@ struct Reader {
 };
 
 std::string slurp(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path + ": no such world file");
-  if (fs::is_directory(path, ec)) throw InputError(path + ": is a folder, not a world file");
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path + ": cannot read the world file");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
+  return readWholeFile(path, {"no such world file", "is a folder, not a world file",
+                              "cannot read the world file", "a world file"});
 }
 
 }  // namespace

@@ -1,3 +1,4 @@
+#include <carenav/common/text.h>
 #include <carenav/slam/trajectory_plot.h>
 #include <mrpt/img/CImage.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
@@ -41,9 +42,7 @@ double niceFloor(double raw) {
 
 std::string num(double v) {
   if (std::abs(v) < 1e-12) v = 0;  // no "-0"
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
+  return formatGeneral(v);
 }
 
 int textWidth(const std::string& s) { return static_cast<int>(s.size()) * kSmallW; }
