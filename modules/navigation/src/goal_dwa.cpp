@@ -1,6 +1,7 @@
 // goal-dwa: dynamic window towards the next waypoint of the global route
 // (Interbot and HOBBIT: [Conceicao16, Ch. 3]; [Puente14, App. Sec. IV-B]).
 #include <carenav/navigation/local_planner.h>
+#include <carenav/navigation/polyline.h>
 #include <carenav/navigation/safety.h>
 
 #include <algorithm>
@@ -15,17 +16,7 @@ double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::c
 
 /** Distance from p to the polyline (or to its only point). */
 double distanceToPath(const std::vector<TPoint2D>& path, double x, double y) {
-  if (path.empty()) return 0;
-  if (path.size() == 1) return std::hypot(path[0].x - x, path[0].y - y);
-  double best = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i + 1 < path.size(); ++i) {
-    const auto& a = path[i];
-    const auto& b = path[i + 1];
-    const double vx = b.x - a.x, vy = b.y - a.y, l2 = vx * vx + vy * vy;
-    const double u = l2 > 0 ? std::clamp(((x - a.x) * vx + (y - a.y) * vy) / l2, 0.0, 1.0) : 0;
-    best = std::min(best, std::hypot(a.x + u * vx - x, a.y + u * vy - y));
-  }
-  return best;
+  return path.empty() ? 0 : nearestOnPolyline(path, x, y).distance;
 }
 
 class GoalDwa final : public LocalPlanner {
@@ -45,14 +36,13 @@ class GoalDwa final : public LocalPlanner {
 
   PlannerOutput plan(const PlannerInput& in) override {
     PlannerOutput out;
-    if (!in.map || (in.path.empty() && !in.goal)) {
+    const auto route = routeAhead(in);
+    if (!route) {
       out.mark(PlanStatus::NoRoute);
       return out;
     }
-    std::vector<TPoint2D> path = in.path;
-    if (path.empty()) path.push_back({in.goal->x, in.goal->y});
-    const TPoint2D last = path.back();
-    const double to_goal = std::hypot(last.x - in.pose.x, last.y - in.pose.y);
+    const std::vector<TPoint2D>& path = route->path;
+    const double to_goal = route->to_end;
     const Window win = dynamicWindow(in.current, r_, d_);
     std::vector<Twist> samples;
     double target_heading;
@@ -153,16 +143,9 @@ TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, d
   // No segment to walk along (GoalDwa's path for a goal with an empty route
   // is the goal alone).
   if (path.size() < 2) return path.empty() ? TPoint2D{x, y} : path.front();
-  size_t seg = 0;
-  double best = std::numeric_limits<double>::infinity(), best_u = 0;
-  for (size_t i = 0; i + 1 < path.size(); ++i) {
-    const auto& a = path[i];
-    const auto& b = path[i + 1];
-    const double vx = b.x - a.x, vy = b.y - a.y, l2 = vx * vx + vy * vy;
-    const double u = l2 > 0 ? std::clamp(((x - a.x) * vx + (y - a.y) * vy) / l2, 0.0, 1.0) : 0;
-    const double d = std::hypot(a.x + u * vx - x, a.y + u * vy - y);
-    if (d < best) best = d, seg = i, best_u = u;
-  }
+  const PolylinePoint near = nearestOnPolyline(path, x, y);
+  const size_t seg = near.segment;
+  const double best_u = near.u;
   double left = lookahead;
   TPoint2D p{path[seg].x + best_u * (path[seg + 1].x - path[seg].x),
              path[seg].y + best_u * (path[seg + 1].y - path[seg].y)};

@@ -116,6 +116,15 @@ bool canBrake(const Twist& cmd, double time_to_collision, const RobotParams& rob
   return stop_time / 2 <= available;
 }
 
+std::optional<RouteAhead> routeAhead(const PlannerInput& in) {
+  if (!in.map || (in.path.empty() && !in.goal)) return std::nullopt;
+  RouteAhead r;
+  r.path = in.path;
+  if (r.path.empty()) r.path.push_back({in.goal->x, in.goal->y});
+  r.to_end = std::hypot(r.path.back().x - in.pose.x, r.path.back().y - in.pose.y);
+  return r;
+}
+
 Window dynamicWindow(const Twist& cur, const RobotParams& r, const DwaParams& p) {
   Window w;
   const double dv = r.acc_v * p.window_time, dw = r.acc_w * p.window_time;

@@ -116,14 +116,14 @@ class MrptPtg final : public LocalPlanner {
 
   PlannerOutput plan(const PlannerInput& in) override {
     PlannerOutput out;
-    if (!in.map || (in.path.empty() && !in.goal)) {
+    const auto route = routeAhead(in);
+    if (!route) {
       out.mark(PlanStatus::NoRoute);
       return out;
     }
-    std::vector<TPoint2D> path = in.path;
-    if (path.empty()) path.push_back({in.goal->x, in.goal->y});
+    const std::vector<TPoint2D>& path = route->path;
     const TPoint2D last = path.back();
-    const double to_goal = std::hypot(last.x - in.pose.x, last.y - in.pose.y);
+    const double to_goal = route->to_end;
     if (in.goal && to_goal < p_.goal_tolerance) return alignAtGoal(in);
 
     const TPoint2D target = lookaheadPoint(path, in.pose.x, in.pose.y, q_.lookahead);

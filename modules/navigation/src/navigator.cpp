@@ -1,4 +1,5 @@
 #include <carenav/navigation/navigator.h>
+#include <carenav/navigation/polyline.h>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservationRange.h>
@@ -183,18 +184,10 @@ namespace {
 double routeLeft(const std::vector<TPoint2D>& path, double x, double y) {
   if (path.empty()) return 0;
   if (path.size() == 1) return std::hypot(path[0].x - x, path[0].y - y);
-  size_t seg = 0;
-  double best = 1e18, best_u = 0;
-  for (size_t i = 0; i + 1 < path.size(); ++i) {
-    const auto& a = path[i];
-    const auto& b = path[i + 1];
-    const double vx = b.x - a.x, vy = b.y - a.y, l2 = vx * vx + vy * vy;
-    const double u = l2 > 0 ? std::clamp(((x - a.x) * vx + (y - a.y) * vy) / l2, 0.0, 1.0) : 0;
-    const double d = std::hypot(a.x + u * vx - x, a.y + u * vy - y);
-    if (d < best) best = d, seg = i, best_u = u;
-  }
-  double left = best + (1 - best_u) *
-                           std::hypot(path[seg + 1].x - path[seg].x, path[seg + 1].y - path[seg].y);
+  const PolylinePoint near = nearestOnPolyline(path, x, y);
+  const size_t seg = near.segment;
+  double left = near.distance + (1 - near.u) * std::hypot(path[seg + 1].x - path[seg].x,
+                                                          path[seg + 1].y - path[seg].y);
   for (size_t i = seg + 1; i + 1 < path.size(); ++i)
     left += std::hypot(path[i + 1].x - path[i].x, path[i + 1].y - path[i].y);
   return left;

@@ -1,6 +1,7 @@
 // Recovery behaviours (docs/navigate.md, "Recovery"): back out along the
 // recent path, turn on the spot, wait; then replan. Nav2's recoveries
 // (back up, spin, wait) are the model.
+#include <carenav/navigation/polyline.h>
 #include <carenav/navigation/recovery.h>
 #include <carenav/navigation/safety.h>
 
@@ -16,17 +17,7 @@ double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::c
 
 /** Distance from (x, y) to the polyline of the poses' positions. */
 double distanceToPoses(const std::vector<TPose2D>& path, double x, double y) {
-  if (path.empty()) return std::numeric_limits<double>::infinity();
-  if (path.size() == 1) return std::hypot(path[0].x - x, path[0].y - y);
-  double best = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i + 1 < path.size(); ++i) {
-    const auto& a = path[i];
-    const auto& b = path[i + 1];
-    const double vx = b.x - a.x, vy = b.y - a.y, l2 = vx * vx + vy * vy;
-    const double u = l2 > 0 ? std::clamp(((x - a.x) * vx + (y - a.y) * vy) / l2, 0.0, 1.0) : 0;
-    best = std::min(best, std::hypot(a.x + u * vx - x, a.y + u * vy - y));
-  }
-  return best;
+  return nearestOnPolyline(path, x, y).distance;  // +inf when empty
 }
 
 /** Spacing of the recorded path's points (m). */

@@ -156,6 +156,16 @@ class PlannerRegistry {
 TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead,
                         double corner = M_PI, double reached = 0.15);
 
+/** What a goal planner follows: the route ahead (the goal alone when the
+ *  route is empty) and the distance from the robot to its end. */
+struct RouteAhead {
+  std::vector<TPoint2D> path;  ///< never empty
+  double to_end = 0;           ///< m, robot to path.back()
+};
+/** The route of `in`; nothing when there is no map, or neither route nor
+ *  goal (the plan is then PlanStatus::NoRoute). */
+std::optional<RouteAhead> routeAhead(const PlannerInput& in);
+
 /** [Rosa17]'s shared control for a walker (Alg. 4, Eq. 4.10). */
 std::unique_ptr<LocalPlanner> makeUserIntentDwa(const NavigationParams& p, const RobotParams& r);
 /** Goal-directed DWA: heading to the next waypoint, clearance, speed,
