@@ -24,11 +24,10 @@ GlobalPlanner::GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double 
   for (int y = 0; y < ny_; ++y)
     for (int x = 0; x < nx_; ++x)
       free_[static_cast<size_t>(y) * nx_ + x] = map.getCell(x, y) > free_threshold ? 1 : 0;
-  const auto d2 = squaredDistanceTransform(free_, nx_, ny_);
+  const auto d2 = squaredDistanceTransform<float>(free_, nx_, ny_);
   dist_.resize(d2.size());
   for (size_t i = 0; i < d2.size(); ++i)
-    dist_[i] =
-        std::isinf(d2[i]) ? 1e6f : static_cast<float>(std::sqrt(static_cast<float>(d2[i])) * res_);
+    dist_[i] = std::isinf(d2[i]) ? 1e6f : static_cast<float>(std::sqrt(d2[i]) * res_);
 }
 
 bool GlobalPlanner::isFree(double x, double y) const {

@@ -323,12 +323,11 @@ void LocalCostmap::build(const TPoint2D& c, const std::vector<TPoint2D>& obstacl
         if (1.0 - static_map->getPos(x, y) > static_occupied) mark(ix, iy);
       }
   }
-  // Distances in float (a whole-number d2 is exact in float), as the cost map keeps them.
-  const auto d2 = squaredDistanceTransform(free, n_, n_);
+  const auto d2 = squaredDistanceTransform<float>(free, n_, n_);
   dist_.resize(d2.size());
   for (size_t i = 0; i < d2.size(); ++i)
-    dist_[i] = std::isinf(d2[i]) ? static_cast<float>(far_)
-                                 : static_cast<float>(std::sqrt(static_cast<float>(d2[i])) * res_);
+    dist_[i] =
+        std::isinf(d2[i]) ? static_cast<float>(far_) : static_cast<float>(std::sqrt(d2[i]) * res_);
 }
 
 void LocalCostmap::addMoving(const std::vector<TPoint2D>& moving, double inflation) {
@@ -343,10 +342,10 @@ void LocalCostmap::addMoving(const std::vector<TPoint2D>& moving, double inflati
     f = 0;
   }
   if (!moving_cells_) return;
-  const auto d2 = squaredDistanceTransform(free, n_, n_);
+  const auto d2 = squaredDistanceTransform<float>(free, n_, n_);
   for (size_t i = 0; i < d2.size(); ++i) {
     if (std::isinf(d2[i])) continue;
-    const double d = std::max(0.0, std::sqrt(static_cast<float>(d2[i])) * res_ - inflation);
+    const double d = std::max(0.0, std::sqrt(d2[i]) * res_ - inflation);
     if (d < dist_[i]) dist_[i] = static_cast<float>(d);
   }
 }

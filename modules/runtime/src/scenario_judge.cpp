@@ -22,12 +22,10 @@ TruthClearance::TruthClearance(const sim::World& w, const RobotParams& robot, do
           c.wall() || std::abs(c.floor) > step || (c.hasSlab() && c.slab_lo < robot.height);
       if (blocked) free[static_cast<size_t>(y) * nx + x] = 0;
     }
-  const auto d2 = squaredDistanceTransform(free, nx, ny);
+  const auto d2 = squaredDistanceTransform<float>(free, nx, ny);
   dist_.resize(d2.size());
   for (size_t i = 0; i < d2.size(); ++i)
-    dist_[i] = std::isinf(d2[i])
-                   ? 1e3f
-                   : static_cast<float>(std::sqrt(static_cast<float>(d2[i])) * w.resolution());
+    dist_[i] = std::isinf(d2[i]) ? 1e3f : static_cast<float>(std::sqrt(d2[i]) * w.resolution());
 }
 
 double TruthClearance::at(const sim::Pose2& p, const std::vector<sim::PersonNow>& people) const {

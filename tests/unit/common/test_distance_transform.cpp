@@ -24,16 +24,21 @@ TEST(DistanceTransform, MatchesBruteForceOnRandomGrids) {
       obs.emplace_back(x, y);
     }
     const auto d2 = squaredDistanceTransform(free, nx, ny);
+    const auto f2 = squaredDistanceTransform<float>(free, nx, ny);
     for (int y = 0; y < ny; ++y)
       for (int x = 0; x < nx; ++x) {
         double best = std::numeric_limits<double>::infinity();
         for (const auto& [ox, oy] : obs)
           best = std::min(best, double(x - ox) * (x - ox) + double(y - oy) * (y - oy));
         const double got = d2[static_cast<size_t>(y) * nx + x];
-        if (std::isinf(best))
+        const float got_f = f2[static_cast<size_t>(y) * nx + x];
+        if (std::isinf(best)) {
           EXPECT_TRUE(std::isinf(got));
-        else
+          EXPECT_TRUE(std::isinf(got_f));
+        } else {
           ASSERT_EQ(got, best) << trial << " at " << x << "," << y;
+          ASSERT_EQ(got_f, static_cast<float>(best)) << trial << " at " << x << "," << y;
+        }
       }
   }
 }
