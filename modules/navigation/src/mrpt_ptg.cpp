@@ -33,6 +33,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <optional>
 
 namespace carenav::navigation {
 
@@ -123,100 +124,125 @@ class MrptPtg final : public LocalPlanner {
     }
     const std::vector<TPoint2D>& path = route->path;
     const TPoint2D last = path.back();
-    const double to_goal = route->to_end;
-    if (in.goal && to_goal < p_.goal_tolerance) return alignAtGoal(in);
+    if (in.goal && route->to_end < p_.goal_tolerance) return alignAtGoal(in);
 
     const TPoint2D target = lookaheadPoint(path, in.pose.x, in.pose.y, q_.lookahead);
     const double c = std::cos(in.pose.phi), s = std::sin(in.pose.phi);
     const double tdx = target.x - in.pose.x, tdy = target.y - in.pose.y;
-    const mrpt::math::TPoint2D rel_target{c * tdx + s * tdy, -s * tdx + c * tdy};
-    const bool target_is_goal = in.goal && std::hypot(target.x - last.x, target.y - last.y) < 1e-6;
+    Aim aim;
+    aim.rel_target = {c * tdx + s * tdy, -s * tdx + c * tdy};
+    aim.is_goal = in.goal && std::hypot(target.x - last.x, target.y - last.y) < 1e-6;
+    aim.obstacles = obstaclePoints(*in.map, in.pose);
+    aim.current = in.current;
 
-    const auto obstacles = obstaclePoints(*in.map, in.pose);
-
-    struct Candidate {
-      size_t family = 0;
-      uint16_t k = 0;
-      double speed = 0, free = 0, score = -std::numeric_limits<double>::infinity();
-    };
     Candidate best;
     bool found = false;
     for (size_t f = 0; f < families_.size(); ++f) {
-      Family& fam = families_[f];
-      auto& ptg = *fam.ptg;
-      const double ref = ptg.getRefDistance();
-      mrpt::nav::CParameterizedTrajectoryGenerator::TNavDynamicState dyn;
-      dyn.curVelLocal = {in.current.v, 0, in.current.w};
-      dyn.relTarget = {rel_target.x, rel_target.y, 0};
-      dyn.targetRelSpeed = 0;
-      ptg.updateNavDynamicState(dyn);
-
-      ptg.initTPObstacles(fam.tp_obstacles);
-      if (q_.evaluate_clearance) ptg.initClearanceDiagram(fam.clearance);
-      for (const auto& o : obstacles) {
-        ptg.updateTPObstacle(o.x, o.y, fam.tp_obstacles);
-        if (q_.evaluate_clearance) ptg.updateClearance(o.x, o.y, fam.clearance);
-      }
-      if (q_.evaluate_clearance) ptg.updateClearancePost(fam.clearance, fam.tp_obstacles);
-      // Normalised free distances, each shortened by the robot's safe
-      // distance (the supervisor stops the robot that far before a contact
-      // along its path, so a path is only free up to there).
-      const double margin = r_.safe_distance / ref;
-      for (double& d : fam.tp_obstacles)
-        d = d >= ref * (1 - 1e-9) ? 1.0 : std::clamp(d / ref - margin, 0.0, 1.0);
-      out.evaluated += fam.tp_obstacles.size();
-      for (double d : fam.tp_obstacles) out.admissible += d > q_.secure_start;
-
-      int tk = 0;
-      double td = 0;
-      ptg.inverseMap_WS2TP(rel_target.x, rel_target.y, tk, td);
-      td = std::clamp(td, 0.0, 1.0);
-      const double talpha = ptg.index2alpha(static_cast<uint16_t>(tk));
-
-      mrpt::nav::CAbstractHolonomicReactiveMethod::NavInput ni;
-      ni.obstacles = fam.tp_obstacles;
-      ni.targets = {{std::cos(talpha) * td, std::sin(talpha) * td}};
-      ni.maxRobotSpeed = 1.0;
-      ni.maxObstacleDist = 1.0;
-      ni.clearance = q_.evaluate_clearance ? &fam.clearance : nullptr;
-      mrpt::nav::CAbstractHolonomicReactiveMethod::NavOutput no;
-      fam.holo->enableApproachTargetSlowDown(target_is_goal);
-      fam.holo->navigate(ni, no);
-      if (!(no.desiredSpeed > 0)) continue;
-
-      Candidate cand;
-      cand.family = f;
-      cand.k = ptg.alpha2index(no.desiredDirection);
-      cand.free = fam.tp_obstacles[cand.k];
-      if (cand.free <= q_.secure_start) continue;
-      cand.speed = std::min(1.0, no.desiredSpeed);
-      // Score: how near to the target the robot gets along the chosen path
-      // before its first obstacle (or at the target's distance), as the
-      // "euclidean_nearness" and "collision_free_distance" terms of MRPT's
-      // example configuration of CMultiObjMotionOpt_Scalarization.
-      const double along = std::min(cand.free, td) * ref;
-      uint32_t step = 0;
-      mrpt::math::TPose2D end{0, 0, 0};
-      if (ptg.getPathStepForDist(cand.k, along, step)) end = ptg.getPathPose(cand.k, step);
-      const double e = std::hypot(end.x - rel_target.x, end.y - rel_target.y);
-      cand.score = ptg.getScorePriority() *
-                   (1.0 / (1.0 + e * e) + 0.5 * std::min(1.0, cand.free / std::max(td, 1e-3)));
-      if (cand.score > best.score) {
-        best = cand;
+      const auto cand = evaluateFamily(f, aim, out);
+      if (cand && cand->score > best.score) {
+        best = *cand;
         found = true;
       }
     }
-    if (!found) {
+    if (!found || !command(best, out)) {
       out.mark(PlanStatus::NoAdmissible);
       return out;
     }
+    out.trajectories.push_back(
+        rollout(*in.map, in.pose, out.cmd, p_.sim_time, p_.sim_step, p_.clearance_influence, 0));
+    return out;
+  }
+
+ private:
+  /** Where the robot aims this cycle, in its own frame, and what it sees. */
+  struct Aim {
+    mrpt::math::TPoint2D rel_target;
+    bool is_goal = false;  ///< the target is the goal itself (slow down towards it)
+    std::vector<mrpt::math::TPoint2D> obstacles;
+    Twist current;  ///< the measured velocity
+  };
+  /** The path one family's holonomic method picks, with its score. */
+  struct Candidate {
+    size_t family = 0;
+    uint16_t k = 0;
+    double speed = 0, free = 0, score = -std::numeric_limits<double>::infinity();
+  };
+
+  /** Family f's TP-space obstacles and holonomic choice; nothing when it
+   *  offers no path with a secure start. Counts the paths into `out`. */
+  std::optional<Candidate> evaluateFamily(size_t f, const Aim& aim, PlannerOutput& out) {
+    const mrpt::math::TPoint2D& rel_target = aim.rel_target;
+    const bool target_is_goal = aim.is_goal;
+    const auto& obstacles = aim.obstacles;
+    Family& fam = families_[f];
+    auto& ptg = *fam.ptg;
+    const double ref = ptg.getRefDistance();
+    mrpt::nav::CParameterizedTrajectoryGenerator::TNavDynamicState dyn;
+    dyn.curVelLocal = {aim.current.v, 0, aim.current.w};
+    dyn.relTarget = {rel_target.x, rel_target.y, 0};
+    dyn.targetRelSpeed = 0;
+    ptg.updateNavDynamicState(dyn);
+
+    ptg.initTPObstacles(fam.tp_obstacles);
+    if (q_.evaluate_clearance) ptg.initClearanceDiagram(fam.clearance);
+    for (const auto& o : obstacles) {
+      ptg.updateTPObstacle(o.x, o.y, fam.tp_obstacles);
+      if (q_.evaluate_clearance) ptg.updateClearance(o.x, o.y, fam.clearance);
+    }
+    if (q_.evaluate_clearance) ptg.updateClearancePost(fam.clearance, fam.tp_obstacles);
+    // Normalised free distances, each shortened by the robot's safe
+    // distance (the supervisor stops the robot that far before a contact
+    // along its path, so a path is only free up to there).
+    const double margin = r_.safe_distance / ref;
+    for (double& d : fam.tp_obstacles)
+      d = d >= ref * (1 - 1e-9) ? 1.0 : std::clamp(d / ref - margin, 0.0, 1.0);
+    out.evaluated += fam.tp_obstacles.size();
+    for (double d : fam.tp_obstacles) out.admissible += d > q_.secure_start;
+
+    int tk = 0;
+    double td = 0;
+    ptg.inverseMap_WS2TP(rel_target.x, rel_target.y, tk, td);
+    td = std::clamp(td, 0.0, 1.0);
+    const double talpha = ptg.index2alpha(static_cast<uint16_t>(tk));
+
+    mrpt::nav::CAbstractHolonomicReactiveMethod::NavInput ni;
+    ni.obstacles = fam.tp_obstacles;
+    ni.targets = {{std::cos(talpha) * td, std::sin(talpha) * td}};
+    ni.maxRobotSpeed = 1.0;
+    ni.maxObstacleDist = 1.0;
+    ni.clearance = q_.evaluate_clearance ? &fam.clearance : nullptr;
+    mrpt::nav::CAbstractHolonomicReactiveMethod::NavOutput no;
+    fam.holo->enableApproachTargetSlowDown(target_is_goal);
+    fam.holo->navigate(ni, no);
+    if (!(no.desiredSpeed > 0)) return std::nullopt;
+
+    Candidate cand;
+    cand.family = f;
+    cand.k = ptg.alpha2index(no.desiredDirection);
+    cand.free = fam.tp_obstacles[cand.k];
+    if (cand.free <= q_.secure_start) return std::nullopt;
+    cand.speed = std::min(1.0, no.desiredSpeed);
+    // Score: how near to the target the robot gets along the chosen path
+    // before its first obstacle (or at the target's distance), as the
+    // "euclidean_nearness" and "collision_free_distance" terms of MRPT's
+    // example configuration of CMultiObjMotionOpt_Scalarization.
+    const double along = std::min(cand.free, td) * ref;
+    uint32_t step = 0;
+    mrpt::math::TPose2D end{0, 0, 0};
+    if (ptg.getPathStepForDist(cand.k, along, step)) end = ptg.getPathPose(cand.k, step);
+    const double e = std::hypot(end.x - rel_target.x, end.y - rel_target.y);
+    cand.score = ptg.getScorePriority() *
+                 (1.0 / (1.0 + e * e) + 0.5 * std::min(1.0, cand.free / std::max(td, 1e-3)));
+    return cand;
+  }
+
+  /** The velocity command along the best candidate's path into `out`;
+   *  false when it comes to no motion. */
+  bool command(const Candidate& best, PlannerOutput& out) {
     const Family& fam = families_[best.family];
     const auto cmd = fam.ptg->directionToMotionCommand(best.k);
     const auto* dd = dynamic_cast<const mrpt::kinematics::CVehicleVelCmd_DiffDriven*>(cmd.get());
-    if (!dd) {
-      out.mark(PlanStatus::NoAdmissible);
-      return out;
-    }
+    if (!dd) return false;
     // Secure-distance ramp on the free distance of the chosen path.
     const double ramp =
         std::clamp((best.free - q_.secure_start) / (q_.secure_end - q_.secure_start), 0.0, 1.0);
@@ -232,10 +258,7 @@ class MrptPtg final : public LocalPlanner {
     if (std::abs(out.cmd.v) < 1e-3) out.cmd.v = 0;
     if (std::abs(out.cmd.w) < 1e-3) out.cmd.w = 0;
     out.ok = out.cmd.v != 0 || out.cmd.w != 0;
-    if (!out.ok) {
-      out.mark(PlanStatus::NoAdmissible);
-      return out;
-    }
+    if (!out.ok) return false;
     // Turning on the spot towards a target behind: the paths to its left
     // and to its right score alike and the pick would flip from cycle to
     // cycle; keep turning the way the previous cycle turned.
@@ -248,12 +271,9 @@ class MrptPtg final : public LocalPlanner {
     last_spot_ = spot;
     last_w_ = out.cmd.w;
     out.note = fam.ptg->getDescription();
-    out.trajectories.push_back(
-        rollout(*in.map, in.pose, out.cmd, p_.sim_time, p_.sim_step, p_.clearance_influence, 0));
-    return out;
+    return true;
   }
 
- private:
   Family makeFamily(const std::string& kind) {
     mrpt::config::CConfigFileMemory cfg;
     const std::string sec = "ptg";

@@ -87,10 +87,16 @@ void drawCross(CImage& img, int x, int y, int r, const TColor& c) {
   img.line(x - r, y + r, x + r, y - r, c, 2);
 }
 
-}  // namespace
+/** The plot area: picture size, margins and the world-to-pixel view. */
+struct Frame {
+  static constexpr int left = 56, right = 16, top = 48, bottom = 36;
+  int W = 0, H = 0, plot_w = 0, plot_h = 0;
+  View v;
+  double wx1 = 0, wy0 = 0;  // world right and bottom edges of the plot area
+};
 
-void renderTrajectories(const std::vector<NamedTrajectory>& trajs, const std::string& png,
-                        const PlotOptions& opts) {
+/** A frame around every finite pose, link end and the background map. */
+Frame frameFor(const std::vector<NamedTrajectory>& trajs, const PlotOptions& opts) {
   const double inf = std::numeric_limits<double>::infinity();
   double x0 = inf, y0 = inf, x1 = -inf, y1 = -inf;
   auto grow = [&](double x, double y) {
@@ -113,7 +119,8 @@ void renderTrajectories(const std::vector<NamedTrajectory>& trajs, const std::st
   dx += 2 * pad, dy += 2 * pad;
 
   const int W = std::max(opts.width, 300);
-  const int left = 56, right = 16, top = 48, bottom = 36;
+  Frame f;
+  const int left = Frame::left, right = Frame::right, top = Frame::top, bottom = Frame::bottom;
   const int plot_w = W - left - right;
   int H = opts.height;
   if (H <= 0) H = std::clamp(static_cast<int>(dy * plot_w / dx) + top + bottom, 300, 1400);
@@ -128,38 +135,40 @@ void renderTrajectories(const std::vector<NamedTrajectory>& trajs, const std::st
   v.wy1 = cy + 0.5 * plot_h / v.scale;
   const double wx1 = v.wx0 + plot_w / v.scale, wy0 = v.wy1 - plot_h / v.scale;
 
-  CImage img(W, H, mrpt::img::CH_RGB);
-  img.filledRectangle(0, 0, W - 1, H - 1, kWhite);
-  if (opts.background) drawBackground(img, *opts.background, v, plot_w, plot_h);
+  f.W = W, f.H = H, f.plot_w = plot_w, f.plot_h = plot_h, f.v = v, f.wx1 = wx1, f.wy0 = wy0;
+  return f;
+}
 
-  img.selectTextFont("6x13");
-  if (opts.grid) {
-    const double step = niceStep(std::max(wx1 - v.wx0, v.wy1 - wy0) / 10);
-    for (double gx = std::ceil(v.wx0 / step) * step; gx <= wx1; gx += step) {
-      const int x = v.px(gx);
-      if (!opts.background) img.line(x, top, x, top + plot_h, kGrid, 1);
-      const std::string s = num(gx);
-      img.textOut(x - textWidth(s) / 2, top + plot_h + 4, s, kAxis);
-    }
-    for (double gy = std::ceil(wy0 / step) * step; gy <= v.wy1; gy += step) {
-      const int y = v.py(gy);
-      if (!opts.background) img.line(left, y, left + plot_w, y, kGrid, 1);
-      const std::string s = num(gy);
-      img.textOut(left - 4 - textWidth(s), y - kSmallH / 2, s, kAxis);
-    }
-    img.textOut(left + plot_w - textWidth("x [m]"), top + plot_h + 4 + kSmallH + 2, "x [m]", kAxis);
-    img.textOut(4, top - kSmallH - 4, "y [m]", kAxis);
+/** Axis numbers every nice step, and grid lines where no map is drawn. */
+void drawGrid(CImage& img, const Frame& f, const PlotOptions& opts) {
+  const View& v = f.v;
+  const int left = Frame::left, top = Frame::top, plot_w = f.plot_w, plot_h = f.plot_h;
+  const double wx1 = f.wx1, wy0 = f.wy0;
+  const double step = niceStep(std::max(wx1 - v.wx0, v.wy1 - wy0) / 10);
+  for (double gx = std::ceil(v.wx0 / step) * step; gx <= wx1; gx += step) {
+    const int x = v.px(gx);
+    if (!opts.background) img.line(x, top, x, top + plot_h, kGrid, 1);
+    const std::string s = num(gx);
+    img.textOut(x - textWidth(s) / 2, top + plot_h + 4, s, kAxis);
   }
-  img.rectangle(left, top, left + plot_w, top + plot_h, kAxis, 1);
+  for (double gy = std::ceil(wy0 / step) * step; gy <= v.wy1; gy += step) {
+    const int y = v.py(gy);
+    if (!opts.background) img.line(left, y, left + plot_w, y, kGrid, 1);
+    const std::string s = num(gy);
+    img.textOut(left - 4 - textWidth(s), y - kSmallH / 2, s, kAxis);
+  }
+  img.textOut(left + plot_w - textWidth("x [m]"), top + plot_h + 4 + kSmallH + 2, "x [m]", kAxis);
+  img.textOut(4, top - kSmallH - 4, "y [m]", kAxis);
+}
 
+/** Links, then every trajectory, then start and end marks. */
+void drawTracks(CImage& img, const View& v, const std::vector<NamedTrajectory>& trajs,
+                const std::vector<TColor>& colors, const PlotOptions& opts) {
   for (const auto& [a, b] : opts.links) {
     if (!std::isfinite(a.x + a.y + b.x + b.y)) continue;
     img.line(v.px(a.x), v.py(a.y), v.px(b.x), v.py(b.y), opts.link_color, 1);
   }
 
-  std::vector<TColor> colors;
-  for (size_t k = 0; k < trajs.size(); ++k)
-    colors.push_back(trajs[k].color.value_or(kPalette[k % std::size(kPalette)]));
   for (size_t k = 0; k < trajs.size(); ++k) {
     const auto& t = trajs[k].poses;
     for (size_t i = 1; i < t.size(); ++i) {
@@ -180,8 +189,14 @@ void renderTrajectories(const std::vector<NamedTrajectory>& trajs, const std::st
       drawCross(img, v.px(last->x), v.py(last->y), 6, colors[k]);
     }
   }
+}
 
-  // Title, then the legend on the line below it, both above the plot area.
+/** Title, then the legend on the line below it, both above the plot area. */
+void drawLegend(CImage& img, const Frame& f, const std::vector<NamedTrajectory>& trajs,
+                const std::vector<TColor>& colors, const PlotOptions& opts) {
+  const View& v = f.v;
+  const int left = Frame::left, top = Frame::top, plot_w = f.plot_w;
+  const double wx1 = f.wx1;
   int lx = left;
   const int ly = top - kSmallH - 6;
   if (!opts.title.empty()) {
@@ -215,6 +230,24 @@ void renderTrajectories(const std::vector<NamedTrajectory>& trajs, const std::st
     img.line(bx1, by - 6, bx1, by + 6, kBlack, 1);
     img.textOut(bx0 - 8 - textWidth(s), legend_y, s, kBlack);
   }
+}
+
+}  // namespace
+
+void renderTrajectories(const std::vector<NamedTrajectory>& trajs, const std::string& png,
+                        const PlotOptions& opts) {
+  const Frame f = frameFor(trajs, opts);
+  CImage img(f.W, f.H, mrpt::img::CH_RGB);
+  img.filledRectangle(0, 0, f.W - 1, f.H - 1, kWhite);
+  if (opts.background) drawBackground(img, *opts.background, f.v, f.plot_w, f.plot_h);
+  img.selectTextFont("6x13");
+  if (opts.grid) drawGrid(img, f, opts);
+  img.rectangle(Frame::left, Frame::top, Frame::left + f.plot_w, Frame::top + f.plot_h, kAxis, 1);
+  std::vector<TColor> colors;
+  for (size_t k = 0; k < trajs.size(); ++k)
+    colors.push_back(trajs[k].color.value_or(kPalette[k % std::size(kPalette)]));
+  drawTracks(img, f.v, trajs, colors, opts);
+  drawLegend(img, f, trajs, colors, opts);
   save(img, png);
 }
 
