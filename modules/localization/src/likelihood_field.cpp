@@ -70,7 +70,7 @@ LikelihoodField::LikelihoodField(const COccupancyGridMap2D& map, const Localizat
 }
 
 void LikelihoodField::scanPoints(const mrpt::obs::CObservation2DRangeScan& scan,
-                                 std::vector<float>& xs, std::vector<float>& ys) const {
+                                 std::vector<float>& xs, std::vector<float>& ys, int every) const {
   xs.clear();
   ys.clear();
   mrpt::maps::CPointsMap::TInsertionOptions opts;
@@ -80,7 +80,9 @@ void LikelihoodField::scanPoints(const mrpt::obs::CObservation2DRangeScan& scan,
   const auto* pm = scan.buildAuxPointsMap<mrpt::maps::CPointsMap>(&opts);
   if (!pm) return;
   const size_t n = pm->size();
-  const size_t step = n < 10 ? 1 : static_cast<size_t>(std::max(1, decimation_));
+  const size_t step = every > 0 ? static_cast<size_t>(every)
+                      : n < 10  ? 1
+                                : static_cast<size_t>(std::max(1, decimation_));
   const auto& px = pm->getPointsBufferRef_x();
   const auto& py = pm->getPointsBufferRef_y();
   for (size_t j = 0; j < n; j += step) {

@@ -66,6 +66,16 @@ const ParamTable<LocalizationParams>& LocalizationParams::table() {
                 "augmented MCL: decay rate of the short-term likelihood average")
           .real("max_inject_fraction", &P::max_inject_fraction, "", 0, 1,
                 "augmented MCL: largest share of particles replaced in one update")
+          .real("recovery_ratio", &P::recovery_ratio, "", 0, 1,
+                "recovery guard: an update whose w_fast/w_slow is below this counts as low")
+          .integer("recovery_patience", &P::recovery_patience, "", 1, 1000,
+                   "recovery guard: consecutive low updates (or updates of a tight cloud that "
+                   "disagrees with the map) before random particles are injected")
+          .real("consistent_beams", &P::consistent_beams, "", 0, 1,
+                "recovery guard: a tight cloud whose estimate sees at least this share of beams "
+                "not passing through a mapped obstacle is consistent and gets no random "
+                "particles; one that disagrees recovery_patience updates in a row is lost and a "
+                "global search replaces it (0: no consistency rule)")
           .real("lost_inject_fraction", &P::lost_inject_fraction, "", 0, 1,
                 "at a loss: random particles added, as a share of the global start's sample size")
           .real("converged_spread", &P::converged_spread, "m", 0.001, 100,

@@ -131,7 +131,7 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
     r.covs.push_back(sr.cov);
     if (sr.updated)
       r.records.push_back({t, sr.particles, sr.spread, sr.likelihood_ratio, sr.seconds, sr.injected,
-                           sr.beta, sr.resampled});
+                           sr.beta, sr.resampled, sr.agreement});
     if (tty && r.scans % 10 == 0)
       std::cerr << "\r[localize] scan " << r.scans << ", " << sr.particles << " particles, spread "
                 << sr.spread << " m   " << std::flush;
@@ -291,6 +291,7 @@ std::string LocalizeJobResult::summaryJson(const LocalizeJobOptions& o) const {
     j.key("spread").value(rec.spread).key("likelihood_ratio").value(rec.likelihood_ratio);
     j.key("injected").value(static_cast<uint64_t>(rec.injected));
     j.key("beta").value(rec.beta).key("resampled").value(rec.resampled);
+    j.key("agreement").value(rec.agreement);
     j.key("ms").value(1000 * rec.seconds);
     j.endObject();
   }

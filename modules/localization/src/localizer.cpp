@@ -32,6 +32,16 @@ mrpt::bayes::CParticleFilter::TParticleFilterOptions filterOptions(const Localiz
   return o;
 }
 
+// MRPT's generator keeps the second value of its last Gaussian pair
+// (std::normal_distribution) across randomize(seed): a seeded run would
+// depend on how many Gaussians were drawn before it. Its reset() is reached
+// through a member pointer named in a derived class.
+struct GaussianCache : mrpt::random::CRandomGenerator {
+  static void clear(mrpt::random::CRandomGenerator& g) {
+    (g.*(&GaussianCache::m_normdistribution)).reset();
+  }
+};
+
 }  // namespace
 
 Localizer::Localizer(const COccupancyGridMap2D& map, const LocalizationParams& params)
@@ -59,6 +69,7 @@ Localizer::Localizer(const COccupancyGridMap2D& map, const LocalizationParams& p
   mcl_.options.metricMap = map_;
   field_ = LikelihoodField(*map_, p_);
   mrpt::random::getRandomGenerator().randomize(static_cast<uint32_t>(p_.seed));
+  GaussianCache::clear(mrpt::random::getRandomGenerator());
 }
 
 double Localizer::scanLogLikelihood(const mrpt::obs::CObservation2DRangeScan& scan,
@@ -67,6 +78,60 @@ double Localizer::scanLogLikelihood(const mrpt::obs::CObservation2DRangeScan& sc
   std::vector<float> xs, ys;
   field_.scanPoints(scan, xs, ys);
   return field_.logLikelihood(xs, ys, pose.x(), pose.y(), pose.phi());
+}
+
+double Localizer::scanAgreement(const mrpt::obs::CObservation2DRangeScan& scan,
+                                const CPose2D& pose) const {
+  if (!scan.isPlanarScan(map_->insertionOptions.horizontalTolerance)) return 1;
+  std::vector<float> xs, ys;
+  field_.scanPoints(scan, xs, ys, 1);
+  return agreementOf(xs, ys, scan.sensorPose.x(), scan.sensorPose.y(), pose);
+}
+
+// True when the segment passes through an occupied cell (free probability
+// below 1 - free_threshold); a segment leaving the map contradicts nothing
+// beyond it.
+bool Localizer::crossesObstacle(double x0, double y0, double x1, double y1) const {
+  const double len = std::hypot(x1 - x0, y1 - y0);
+  const double step = 0.5 * map_->getResolution();
+  const int n = static_cast<int>(std::ceil(len / step));
+  const double occupied = 1 - p_.free_threshold;
+  const int sx = static_cast<int>(map_->getSizeX()), sy = static_cast<int>(map_->getSizeY());
+  for (int i = 0; i <= n; ++i) {
+    const double a = n == 0 ? 0 : static_cast<double>(i) / n;
+    const int cx = map_->x2idx(x0 + a * (x1 - x0)), cy = map_->y2idx(y0 + a * (y1 - y0));
+    if (cx < 0 || cy < 0 || cx >= sx || cy >= sy) return false;
+    if (map_->getCell(cx, cy) < occupied) return true;
+  }
+  return false;
+}
+
+// The share of points (robot frame; sensor at sx, sy) whose beam from pose
+// reaches to within lf_max_corr_dist of the point without crossing an
+// occupied cell: a beam may end short of the map's walls (something not on
+// the map), it must not see through them. The first lf_max_corr_dist of a
+// beam is not checked either: a map may hold an obstacle where the robot
+// now stands (a person mapped there earlier).
+double Localizer::agreementOf(const std::vector<float>& xs, const std::vector<float>& ys, double sx,
+                              double sy, const CPose2D& pose) const {
+  if (xs.empty()) return 1;
+  const double c = std::cos(pose.phi()), s = std::sin(pose.phi());
+  const double ox = pose.x() + c * sx - s * sy, oy = pose.y() + s * sx + c * sy;
+  const double margin = p_.lf_max_corr_dist;
+  size_t agree = 0;
+  for (size_t i = 0; i < xs.size(); ++i) {
+    const double ex = pose.x() + c * xs[i] - s * ys[i], ey = pose.y() + s * xs[i] + c * ys[i];
+    const double len = std::hypot(ex - ox, ey - oy);
+    if (len <= 2 * margin) {
+      ++agree;
+      continue;
+    }
+    const double k0 = margin / len, k1 = (len - margin) / len;
+    if (!crossesObstacle(ox + k0 * (ex - ox), oy + k0 * (ey - oy), ox + k1 * (ex - ox),
+                         oy + k1 * (ey - oy)))
+      ++agree;
+  }
+  return static_cast<double>(agree) / static_cast<double>(xs.size());
 }
 
 Localizer::~Localizer() = default;
@@ -167,6 +232,7 @@ void Localizer::initUniform(const std::vector<size_t>& cells) {
 
 void Localizer::resetTracking() {
   converged_ = ever_converged_ = false;
+  low_updates_ = disagree_updates_ = 0;
   pending_ = CPose2D();
   rotate_.reset(last_t_);
 }
@@ -265,9 +331,16 @@ void Localizer::weighScan(const mrpt::obs::CObservation2DRangeScan& scan) {
   ll_.resize(n);
   if (!scan.isPlanarScan(map_->insertionOptions.horizontalTolerance)) {
     std::fill(ll_.begin(), ll_.end(), -10.0);  // as MRPT: a tilted scan says nothing
+    pts_x_.clear();
+    pts_y_.clear();
+    all_x_.clear();
+    all_y_.clear();
     return;
   }
   field_.scanPoints(scan, pts_x_, pts_y_);
+  field_.scanPoints(scan, all_x_, all_y_, 1);
+  sensor_x_ = scan.sensorPose.x();
+  sensor_y_ = scan.sensorPose.y();
   for (size_t i = 0; i < n; ++i) {
     const auto& d = mcl_.m_particles[i].d;
     ll_[i] = field_.logLikelihood(pts_x_, pts_y_, d.x, d.y, d.phi);
@@ -322,16 +395,55 @@ bool Localizer::updateConvergence(double jump, double t) {
   return false;
 }
 
-// Augmented MCL's recovery: random particles, a share 1 - w_fast / w_slow
-// (at most max_inject_fraction), or lost_inject_fraction just after a loss.
+// The recovery guard: the share of random particles after an update that
+// found no loss. While the cloud is wide (spread >= converged_spread: a
+// global search, no estimate to keep), augmented MCL's 1 - w_fast / w_slow
+// (at most max_inject_fraction). While it is tight: nothing when its
+// estimate agrees with the scan; max_inject_fraction after recovery_patience
+// updates in a row that disagree (w_slow may have learnt a wrong pose's
+// level): see restartSearch; augmented MCL's share only after
+// recovery_patience updates in a row with w_fast / w_slow below
+// recovery_ratio.
+double Localizer::guardedFraction(const StepResult& r) {
+  const bool tight = spread_ < p_.converged_spread;
+  const bool rule = p_.consistent_beams > 0;
+  const bool disagrees = rule && r.agreement < p_.consistent_beams;
+  low_updates_ = r.likelihood_ratio < p_.recovery_ratio ? low_updates_ + 1 : 0;
+  disagree_updates_ = tight && disagrees ? disagree_updates_ + 1 : 0;
+  const int patience = std::max(1, p_.recovery_patience);
+  const double augmented = std::min(p_.max_inject_fraction, std::max(0.0, 1 - r.likelihood_ratio));
+  if (!tight) return augmented;  // no estimate to keep: a global search, plain augmented MCL
+  if (rule && !disagrees) return 0;
+  return low_updates_ >= patience ? augmented : 0;
+}
+
+// A tight cloud whose estimate the map contradicted recovery_patience
+// updates in a row: a loss. Its particles are evidence of nothing (they
+// would only pull the search back to a look-alike near them), so they give
+// way to a global search over the free space, as at a global start.
+size_t Localizer::restartSearch() {
+  converged_ = false;
+  events_.push_back({LocalizationEvent::Kind::Loss, last_t_, spread_});
+  const size_t n = globalCount();
+  mcl_.m_particles.resize(n);
+  for (auto& part : mcl_.m_particles) {
+    part.d = randomFreePose();
+    part.log_w = 0;
+  }
+  refreshEstimate();
+  return n;
+}
+
+// Augmented MCL's recovery behind the guard above, or lost_inject_fraction
+// just after a loss.
 void Localizer::recover(bool lost_now, StepResult& r) {
   if (!p_.recovery) return;
-  const double fraction =
-      lost_now ? std::max(p_.lost_inject_fraction, 0.0)
-               : std::min(p_.max_inject_fraction, std::max(0.0, 1 - r.likelihood_ratio));
-  r.injected = inject(fraction);
+  const double fraction = lost_now ? std::max(p_.lost_inject_fraction, 0.0) : guardedFraction(r);
+  const bool contradicted = !lost_now && disagree_updates_ >= std::max(1, p_.recovery_patience);
+  r.injected = contradicted ? restartSearch() : inject(fraction);
   if (r.injected > 0) {
     ++injections_;
+    low_updates_ = disagree_updates_ = 0;
     // As AMCL does: start the averages afresh, or the same drop would
     // keep injecting while the new particles are still being weighed.
     averages_set_ = false;
@@ -351,6 +463,7 @@ void Localizer::filterUpdate(const mrpt::obs::CObservation2DRangeScan& scan, dou
   updateAverages(log_w_avg);
   r.likelihood_ratio = std::exp(log_w_fast_ - log_w_slow_);
   refreshEstimate();
+  r.agreement = agreementOf(all_x_, all_y_, sensor_x_, sensor_y_, mean_);
   const double jump = std::hypot(mean_.x() - expected.x(), mean_.y() - expected.y());
   const double turned_rad = std::abs(pending_.phi());
   pending_ = CPose2D();

@@ -21,9 +21,10 @@ class LikelihoodField {
 
   /** The scan's points in the robot frame, as MRPT's likelihood field takes
    *  them (its points map of the scan: points closer than half a cell to the
-   *  previous one dropped), every lf_decimation-th (every one under 10 points). */
+   *  previous one dropped), every lf_decimation-th (every one under 10 points;
+   *  every `every`-th when `every` > 0). */
   void scanPoints(const mrpt::obs::CObservation2DRangeScan& scan, std::vector<float>& xs,
-                  std::vector<float>& ys) const;
+                  std::vector<float>& ys, int every = 0) const;
   /** Sum of the logs of the points (robot frame) seen from pose (x, y, phi);
    *  -100 without points, as MRPT. */
   double logLikelihood(const std::vector<float>& xs, const std::vector<float>& ys, double x,

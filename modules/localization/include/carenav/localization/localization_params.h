@@ -64,6 +64,28 @@ struct LocalizationParams {
   double alpha_slow = 0.05;          ///< decay of the long-term likelihood average
   double alpha_fast = 0.5;           ///< decay of the short-term likelihood average
   double max_inject_fraction = 0.3;  ///< largest share of particles replaced in one update
+  // recovery guard: augmented MCL reacts to one noisy update; on real, low-rate
+  // logs that scatters random particles that take over a right estimate.
+  /** An update is "low" when w_fast/w_slow falls below this; augmented MCL
+   *  itself injects below 1. */
+  double recovery_ratio = 0.5;
+  /** Consecutive low updates (or consecutive updates of a tight cloud that
+   *  disagrees with the map, see consistent_beams) before random particles
+   *  are injected. 1 with recovery_ratio 1 and consistent_beams 0: plain
+   *  augmented MCL. */
+  int recovery_patience = 3;
+  /** A tight cloud (spread below converged_spread) is consistent with the
+   *  map when at least this share of the scan's beams (all of them, not
+   *  decimated), cast from the estimate, do not pass through a mapped obstacle
+   *  (checked from lf_max_corr_dist after the sensor to lf_max_corr_dist
+   *  before the end point; a beam cut short by
+   *  something not on the map, a person, never contradicts the map: the
+   *  beam model's short readings, [Thrun05, Sec. 6.3]). Nothing is injected
+   *  while the cloud is tight and consistent; a tight cloud that disagrees for
+   *  recovery_patience updates in a row is lost (a kidnap that w_slow never
+   *  saw) and gives way to a global search (global_particles random
+   *  particles). 0: no consistency rule. */
+  double consistent_beams = 0.7;
   /** At a loss, random particles over the free space join the set: this share
    *  of the global start's sample size (a global search restarts). */
   double lost_inject_fraction = 0.5;

@@ -48,6 +48,7 @@ struct UpdateRecord {
   size_t injected = 0;
   double beta = 1;         ///< power of the tempered likelihood
   bool resampled = false;  ///< a new set was drawn (KLD) at this update
+  double agreement = 1;    ///< StepResult::agreement
 };
 
 struct LocalizeJobResult {

@@ -42,11 +42,14 @@ struct StepResult {
   size_t particles = 0;             ///< sample size after the step
   double spread = 0;                ///< m, sqrt(var x + var y)
   double likelihood_ratio = 1;      ///< w_fast / w_slow after the update
-  size_t injected = 0;              ///< random particles added by recovery
-  double beta = 1;                  ///< power the scan likelihood was raised to (tempering)
-  bool resampled = false;           ///< the update drew a new set (KLD) before weighing
-  bool rotate_in_place = false;     ///< a rotate-in-place request is open after the step
-  double seconds = 0;               ///< CPU time of the filter update
+  /** Share of the scan's beams that, cast from the estimate after the update,
+   *  do not pass through a mapped obstacle (Localizer::scanAgreement). */
+  double agreement = 1;
+  size_t injected = 0;           ///< random particles added by recovery
+  double beta = 1;               ///< power the scan likelihood was raised to (tempering)
+  bool resampled = false;        ///< the update drew a new set (KLD) before weighing
+  bool rotate_in_place = false;  ///< a rotate-in-place request is open after the step
+  double seconds = 0;            ///< CPU time of the filter update
 };
 
 /** Monte Carlo localisation as MRPT's CMonteCarloLocalization2D runs it
@@ -55,13 +58,16 @@ struct StepResult {
  *  particles), with the likelihood field tabled once for the whole map and the
  *  particles moved and drawn in 2D (the particle set itself and its mean and
  *  covariance stay MRPT's), plus augmented-MCL recovery: short- and long-term
- *  averages of the mean observation likelihood (w_fast, w_slow); after an
- *  update where w_fast/w_slow < 1, a share max(0, 1 - w_fast/w_slow) of the
- *  particles (at most max_inject_fraction) is replaced by random poses over
- *  the free cells. A new set is drawn (KLD) only when the effective sample
- *  size ratio fell below resample_ess; until the filter has converged the
- *  scan likelihood is tempered (temper_ess) and the sample size kept at
- *  global_keep of the global start's. Not thread-safe; one instance per robot. */
+ *  averages of the mean observation likelihood (w_fast, w_slow); after
+ *  recovery_patience updates in a row with w_fast/w_slow < recovery_ratio, a
+ *  share max(0, 1 - w_fast/w_slow) of the particles (at most
+ *  max_inject_fraction) is replaced by random poses over the free cells,
+ *  never while the cloud is tight and its estimate agrees with the scan
+ *  (consistent_beams); a tight cloud that disagrees for recovery_patience
+ *  updates is lost, and a global search replaces it. A new set is drawn (KLD) only when the
+ * effective sample size ratio fell below resample_ess; until the filter has converged the scan
+ * likelihood is tempered (temper_ess) and the sample size kept at global_keep of the global
+ * start's. Not thread-safe; one instance per robot. */
 class Localizer {
  public:
   /** Copies the map. Throws InputError when it has no free cell. */
@@ -103,6 +109,14 @@ class Localizer {
    *  from a table built once for the whole map. */
   double scanLogLikelihood(const mrpt::obs::CObservation2DRangeScan& scan,
                            const mrpt::poses::CPose2D& pose) const;
+  /** Share of the scan's points (every point of its points map, not
+   *  decimated) whose beam, seen from pose, does not pass through an occupied
+   *  cell of the map between lf_max_corr_dist from the sensor and
+   *  lf_max_corr_dist before its end point: 1 for a scan the map explains,
+   *  also when an unmapped obstacle cuts beams short; low for a scan taken
+   *  elsewhere. 1 when the scan has no point. */
+  double scanAgreement(const mrpt::obs::CObservation2DRangeScan& scan,
+                       const mrpt::poses::CPose2D& pose) const;
   double spread() const { return spread_; }
   bool converged() const { return converged_; }
   /** Converging (after an init, not yet converged), Tracking (converged) or
@@ -140,6 +154,11 @@ class Localizer {
   void updateAverages(double log_w_avg);
   bool updateConvergence(double jump, double t);
   void recover(bool lost_now, StepResult& r);
+  double guardedFraction(const StepResult& r);
+  size_t restartSearch();
+  double agreementOf(const std::vector<float>& xs, const std::vector<float>& ys, double sx,
+                     double sy, const mrpt::poses::CPose2D& pose) const;
+  bool crossesObstacle(double x0, double y0, double x1, double y1) const;
   void filterUpdate(const mrpt::obs::CObservation2DRangeScan& scan, double t, StepResult& r);
   double effectiveSampleRatio() const;
   void normalizeWeights();
@@ -159,6 +178,8 @@ class Localizer {
   std::optional<double> convergence_time_;
   std::vector<LocalizationEvent> events_;
   size_t updates_ = 0, injections_ = 0;
+  int low_updates_ = 0, disagree_updates_ = 0;  // recovery guard: consecutive updates
+  double sensor_x_ = 0, sensor_y_ = 0;          // scan origin in the robot frame
   bool ever_converged_ = false;
   size_t global_n_ = 0;  // sample size of the last global start (0: none)
   RotateRequestTracker rotate_;
@@ -166,7 +187,8 @@ class Localizer {
   LikelihoodField field_;
   KldSampler kld_;
   // scratch reused by every update
-  std::vector<float> pts_x_, pts_y_;
+  std::vector<float> pts_x_, pts_y_;  // the points the likelihood field weighs
+  std::vector<float> all_x_, all_y_;  // every point, for the scan agreement
   std::vector<double> prior_, ll_;
 };
 
