@@ -87,6 +87,9 @@ void addLocalizeCommand(CLI::App& app, const GlobalOptions& g) {
                 << " injections";
       if (r.rotate_enabled)
         std::cerr << ", " << r.rotate_requests.size() << " rotate-in-place requests";
+      if (r.dead_reckoning_scans)
+        std::cerr << ", " << r.dead_reckoning_scans
+                  << " scans with too few returns in range (odometry alone there)";
       std::cerr << "\n[localize] final pose (" << f.x << ", " << f.y << ", " << f.yaw * 180 / M_PI
                 << " deg)\n";
       if (r.ate_rmse) std::cerr << "[localize] ATE rmse " << *r.ate_rmse << " m\n";

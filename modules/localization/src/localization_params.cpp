@@ -76,6 +76,10 @@ const ParamTable<LocalizationParams>& LocalizationParams::table() {
                 "not passing through a mapped obstacle is consistent and gets no random "
                 "particles; one that disagrees recovery_patience updates in a row is lost and a "
                 "global search replaces it (0: no consistency rule)")
+          .integer("min_returns", &P::min_returns, "", 0, 100000,
+                   "a scan with fewer returns in range is not weighed: the estimate follows "
+                   "odometry alone (dead reckoning) until a scan with enough returns (0: weigh "
+                   "every scan)")
           .real("lost_inject_fraction", &P::lost_inject_fraction, "", 0, 1,
                 "at a loss: random particles added, as a share of the global start's sample size")
           .real("converged_spread", &P::converged_spread, "m", 0.001, 100,

@@ -122,6 +122,7 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
     t_prev = t;
     const StepResult sr = loc.step(s.odometry.value_or(mrpt::poses::CPose2D()), s.scan, t);
     ++r.scans;
+    r.dead_reckoning_scans += sr.dead_reckoning;
     if (!r.convergence_updates && loc.convergenceTime()) {
       r.convergence_updates = loc.updates();
       r.convergence_scans = r.scans;
@@ -208,6 +209,7 @@ std::string LocalizeJobResult::summaryJson(const LocalizeJobOptions& o) const {
   }
   j.key("scans").value(static_cast<uint64_t>(scans));
   j.key("updates").value(static_cast<uint64_t>(updates));
+  j.key("dead_reckoning_scans").value(static_cast<uint64_t>(dead_reckoning_scans));
   j.key("time_source").value(index_times ? "scan index" : "rawlog timestamps");
   j.key("repeated_times").value(static_cast<uint64_t>(repeated_times));
   j.key("converged").value(convergence_updates.has_value());

@@ -476,6 +476,19 @@ void Localizer::filterUpdate(const mrpt::obs::CObservation2DRangeScan& scan, dou
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+namespace {
+
+/** Valid ranges shorter than the sensor's maximum: what a scan holds to weigh. */
+size_t returnsInRange(const mrpt::obs::CObservation2DRangeScan& scan) {
+  size_t n = 0;
+  for (size_t i = 0; i < scan.getScanSize(); ++i)
+    n += scan.getScanRangeValidity(i) && scan.getScanRange(i) < scan.maxRange * 0.999f &&
+         scan.getScanRange(i) > 0;
+  return n;
+}
+
+}  // namespace
+
 StepResult Localizer::step(const CPose2D& odometry,
                            const mrpt::obs::CObservation2DRangeScan::Ptr& scan, double t) {
   if (!initialised_) throw std::logic_error("Localizer::step before initPose/initGlobal");
@@ -488,7 +501,12 @@ StepResult Localizer::step(const CPose2D& odometry,
                    (p_.update_min_a > 0 && turned >= p_.update_min_a);
   StepResult r;
   last_t_ = t;
-  if (due && scan) filterUpdate(*scan, t, r);
+  if (due && scan) {
+    if (returnsInRange(*scan) < static_cast<size_t>(std::max(0, p_.min_returns)))
+      r.dead_reckoning = true;  // nothing to weigh against: pending_ keeps the odometry
+    else
+      filterUpdate(*scan, t, r);
+  }
   r.pose = pose();
   r.cov = cov_;
   r.particles = particleCount();

@@ -75,11 +75,13 @@ class Replay {
   /** One scan at `truth` after odometry `odo`; occlude: the first half of the
    *  beams read 0.6 m (a person next to the sensor). Returns the position
    *  error of the estimate. */
-  double step(const CPose2D& truth, const CPose2D& odo, bool occlude = false) {
+  double step(const CPose2D& truth, const CPose2D& odo, bool occlude = false, bool blind = false) {
     sim_.reset({truth.x(), truth.y(), truth.phi()});
     auto scan = std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(sim_.observe(0));
     if (occlude)
       for (size_t i = 0; i < scan->getScanSize() / 2; ++i) scan->setScanRange(i, 0.6f);
+    if (blind)  // nothing in range: an open hall, or a blinded sensor
+      for (size_t i = 0; i < scan->getScanSize(); ++i) scan->setScanRange(i, scan->maxRange);
     std::normal_distribution<double> n(0, 1);
     const double d = std::hypot(odo.x(), odo.y());
     const double ex = 0.02 * d * n(rng_), ephi = 0.01 * (d + std::abs(odo.phi())) * n(rng_);
@@ -178,6 +180,45 @@ TEST(RecoveryGuard, ScanAgreementIsHighAtTheTruthAndLowElsewhere) {
   EXPECT_LT(loc.scanAgreement(*scan, CPose2D(3, 6.5, 0.3)), loc.params().consistent_beams);
   for (size_t i = 0; i < scan->getScanSize() / 2; ++i) scan->setScanRange(i, 0.6f);
   EXPECT_GT(loc.scanAgreement(*scan, CPose2D(2, 1.5, 0.3)), 0.95);
+}
+
+// Converged, then 30 scans (1.5 m) with no return in range: no update is
+// weighed, the estimate follows odometry (no jump, nothing injected) and the
+// filter goes on from there when returns come back.
+TEST(DeadReckoning, ScansWithNoReturnsInRangeLeaveTheEstimateToOdometry) {
+  Localizer loc(apartment()->grid(), params());
+  const auto path = walk({{1, 1}, {6, 1}, {6, 2.5}}, 0.05);
+  loc.initPose(path.front(), 0.05, 0.05, mrpt::DEG2RAD(2.0));
+  Replay replay(loc);
+  EXPECT_LT(replay.follow(std::vector<CPose2D>(path.begin(), path.begin() + 40)), 0.3);
+  ASSERT_TRUE(loc.converged());
+  const size_t updates = loc.updates();
+  double worst = 0;
+  for (size_t i = 40; i < 70; ++i) {
+    worst = std::max(worst, replay.step(path[i], path[i] - path[i - 1], false, true));
+    EXPECT_TRUE(replay.last().dead_reckoning) << i;
+    EXPECT_FALSE(replay.last().updated) << i;
+  }
+  EXPECT_EQ(loc.updates(), updates);
+  EXPECT_LT(worst, 0.3);
+  EXPECT_EQ(loc.injections(), 0u);
+  EXPECT_TRUE(loc.events().empty());
+  EXPECT_LT(replay.follow(std::vector<CPose2D>(path.begin() + 69, path.begin() + 110)), 0.3);
+  EXPECT_GT(loc.updates(), updates);
+  EXPECT_TRUE(loc.converged());
+}
+
+// min_returns 0: every scan is weighed, an empty one too (the earlier rule).
+TEST(DeadReckoning, MinReturnsZeroWeighsEveryScan) {
+  LocalizationParams p = params();
+  p.min_returns = 0;
+  Localizer loc(apartment()->grid(), p);
+  const auto path = walk({{1, 1}, {6, 1}}, 0.05);
+  loc.initPose(path.front(), 0.05, 0.05, mrpt::DEG2RAD(2.0));
+  Replay replay(loc);
+  replay.step(path[1], path[1] - path[0], false, true);
+  EXPECT_FALSE(replay.last().dead_reckoning);
+  EXPECT_TRUE(replay.last().updated);
 }
 
 }  // namespace

@@ -86,6 +86,10 @@ struct LocalizationParams {
    *  saw) and gives way to a global search (global_particles random
    *  particles). 0: no consistency rule. */
   double consistent_beams = 0.7;
+  /** A scan with fewer returns in range than this (an open hall, a sensor
+   *  blinded) is not weighed against the map: the estimate follows odometry
+   *  alone until a scan with enough returns comes (0: weigh every scan). */
+  int min_returns = 10;
   /** At a loss, random particles over the free space join the set: this share
    *  of the global start's sample size (a global search restarts). */
   double lost_inject_fraction = 0.5;

@@ -53,6 +53,9 @@ struct UpdateRecord {
 
 struct LocalizeJobResult {
   size_t scans = 0, updates = 0, injections = 0;
+  /** Scans that were due an update but held fewer than min_returns returns
+   *  in range: the estimate followed odometry alone there. */
+  size_t dead_reckoning_scans = 0;
   io::Trajectory2D track;
   std::vector<mrpt::math::CMatrixDouble33> covs;  ///< one per track pose
   std::vector<UpdateRecord> records;

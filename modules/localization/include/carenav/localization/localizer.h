@@ -49,7 +49,10 @@ struct StepResult {
   double beta = 1;               ///< power the scan likelihood was raised to (tempering)
   bool resampled = false;        ///< the update drew a new set (KLD) before weighing
   bool rotate_in_place = false;  ///< a rotate-in-place request is open after the step
-  double seconds = 0;            ///< CPU time of the filter update
+  /** An update was due but the scan held fewer than min_returns returns in
+   *  range: it was not weighed, the estimate is odometry since the last update. */
+  bool dead_reckoning = false;
+  double seconds = 0;  ///< CPU time of the filter update
 };
 
 /** Monte Carlo localisation as MRPT's CMonteCarloLocalization2D runs it
