@@ -78,6 +78,7 @@ RunMetrics RunMetrics::fromJson(const Json& j) {
   read(j, "cycle_ms_mean", m.cycle_ms_mean, nan);
   read(j, "cycle_ms_max", m.cycle_ms_max, nan);
   read(j, "depth_frames", m.depth_frames);
+  read(j, "dead_reckoning_scans", m.dead_reckoning_scans);
   read(j, "perception_ms_mean", m.perception_ms_mean, nan);
   read(j, "wall_seconds", m.wall_seconds, nan);
   read(j, "entered_forbidden", m.entered_forbidden);
@@ -138,6 +139,7 @@ std::string RunMetrics::toJson() const {
   for (double v : rss_mb) j.value(v);
   j.endArray();
   j.key("depth_frames").value(static_cast<uint64_t>(depth_frames));
+  j.key("dead_reckoning_scans").value(static_cast<uint64_t>(dead_reckoning_scans));
   j.key("perception_ms_mean").value(perception_ms_mean);
   j.key("wall_seconds").value(wall_seconds);
   j.endObject();

@@ -117,6 +117,7 @@ void NavigationSession::statusLine(double t, const Navigator::Cycle& c,
             << safetyActionName(c.decision.action) << " " << c.decision.reason << ", clearance "
             << f(cl, 2) << " m";
   if (truth) std::cerr << ", " << truth->collisions << " collisions";
+  if (dead_reckoning_) std::cerr << ", localisation: odometry only (nothing in range)";
   std::cerr << "   " << std::flush;
 }
 

@@ -3,8 +3,8 @@
 // the perception pipeline (2.5D grid, RRT-GPD ground plane, inverse sensor
 // model: stairs down and gutters become obstacles).
 #include <carenav/localization/localizer.h>
-#include <carenav/runtime/session.h>
 #include <carenav/perception/pipeline.h>
+#include <carenav/runtime/session.h>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
@@ -41,7 +41,10 @@ void NavigationSession::observation(const mrpt::obs::CObservation::Ptr& obs, con
   const mrpt::poses::CPose2D inc = loc_started_ ? now_odo - last_loc_odo_ : mrpt::poses::CPose2D();
   last_loc_odo_ = now_odo;
   loc_started_ = true;
-  loc_->step(inc, std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs), t);
+  const auto sr =
+      loc_->step(inc, std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs), t);
+  dead_reckoning_ = sr.dead_reckoning;
+  m_.dead_reckoning_scans += sr.dead_reckoning;
   const auto p = loc_->pose();
   nav_.setMapPose({p.x(), p.y(), p.phi()});
   // HOBBIT: localisation may ask for a turn in place to relocalise.

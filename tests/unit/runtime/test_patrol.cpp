@@ -3,8 +3,8 @@
 #include <carenav/common/errors.h>
 #include <carenav/localization/localization_params.h>
 #include <carenav/navigation/navigation_params.h>
-#include <carenav/runtime/scenario.h>
 #include <carenav/perception/perception_params.h>
+#include <carenav/runtime/scenario.h>
 #include <carenav/sim/sim_params.h>
 #include <carenav/slam/slam_params.h>
 
@@ -131,4 +131,23 @@ TEST(PatrolRun, AGoalThatCannotBeReachedFailsItsLegAndThePatrolGoesOn) {
   EXPECT_FALSE(m.success);
   EXPECT_NE(m.outcome.find("patrol legs failed"), std::string::npos) << m.outcome;
   EXPECT_EQ(m.collisions, 0u);
+}
+
+// Issue 18: with nothing in the lidar's range (the middle of a 20 m room, the
+// range cut to 3 m), the localiser weighs no scan and the estimate follows
+// odometry; the run counts those scans and still gets where it was sent.
+TEST(NothingInView, LocalisationFollowsOdometryAndTheRunSaysSo) {
+  const std::string text =
+      "format: 1\nworld: " + kSrc + "/maps/worlds/empty_room.yaml\nprofile: " + kSrc +
+      "/ini/interbot.ini\nstart: [10, 10, 0]\ngoal: [12, 10, 0]\n" + "duration: 40\nend: true\n";
+  RunOptions o;
+  o.sets = {"sensor.laser.range_max=3"};
+  const RunMetrics m = runScenario(parseScenario(text, "g.yaml", "."), o);
+  EXPECT_GT(m.dead_reckoning_scans, 50u) << "10 scans a second, none with a return";
+  EXPECT_EQ(m.collisions, 0u);
+  // Interbot stops once its estimate is within goal_tolerance (0.5 m) of the
+  // goal; dead reckoning over 2 m adds a few centimetres to that.
+  EXPECT_LT(m.final_goal_error_m, 0.6) << m.outcome;
+  o.sets = {};  // the full range sees the walls: every scan is weighed
+  EXPECT_EQ(runScenario(parseScenario(text, "g.yaml", "."), o).dead_reckoning_scans, 0u);
 }

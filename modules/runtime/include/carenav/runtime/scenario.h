@@ -5,8 +5,8 @@
 #include <carenav/common/errors.h>
 #include <carenav/common/json_fwd.h>
 #include <carenav/common/robot.h>
-#include <carenav/runtime/intent.h>
 #include <carenav/navigation/navigation_params.h>
+#include <carenav/runtime/intent.h>
 
 #include <mrpt/math/TPoint2D.h>
 #include <mrpt/math/TPose2D.h>
@@ -101,8 +101,11 @@ struct RunMetrics {
   size_t cycles = 0, stops = 0, slowed = 0;
   double cycle_ms_mean = 0, cycle_ms_max = 0;  ///< wall time of Navigator::cycle
   size_t depth_frames = 0;                     ///< depth frames through perception
-  double perception_ms_mean = 0;               ///< wall time per depth frame
-  double final_goal_error_m = 0;               ///< goal scenarios
+  /** Localiser scans with too few returns in range to weigh (min_returns):
+   *  the estimate followed odometry alone there. */
+  size_t dead_reckoning_scans = 0;
+  double perception_ms_mean = 0;  ///< wall time per depth frame
+  double final_goal_error_m = 0;  ///< goal scenarios
   double wall_seconds = 0;
   bool entered_forbidden = false;
   bool left_map = false;       ///< the true centre went off the world's map (or onto unknown)

@@ -12,8 +12,8 @@
 #include <carenav/common/run_health.h>
 #include <carenav/io/map_render.h>
 #include <carenav/navigation/global_planner.h>
-#include <carenav/runtime/intent.h>
 #include <carenav/navigation/navigator.h>
+#include <carenav/runtime/intent.h>
 #include <carenav/runtime/scenario.h>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
@@ -187,6 +187,7 @@ class NavigationSession {
   std::string loc_sensor_;
   mrpt::poses::CPose2D last_loc_odo_;
   bool loc_started_ = false, have_odom_ = false;
+  bool dead_reckoning_ = false;  ///< the last localiser scan had too few returns to weigh
   TPose2D odom_;
   std::optional<double> robot_t_;
   std::unique_ptr<perception::Pipeline> perceive_;
