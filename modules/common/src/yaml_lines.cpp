@@ -33,7 +33,7 @@ Scan scanLine(const std::string& s, size_t from) {
       else if (c == q)
         q = 0;
     } else if ((c == '"' || c == '\'') &&
-               (k == from || std::string(" \t[{,:-?").find(s[k - 1]) != std::string::npos)) {
+               (k == from || std::string(" \t[{,").find(s[k - 1]) != std::string::npos)) {
       q = c;  // a quote opens a scalar only at its start (it's text inside it's)
     } else if (c == '#' && (k == from || s[k - 1] == ' ' || s[k - 1] == '\t')) {
       r.end = k;

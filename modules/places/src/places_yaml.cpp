@@ -3,14 +3,11 @@
 #include <carenav/common/file.h>
 #include <carenav/places/places.h>
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <sstream>
 
 #include <unistd.h>
 

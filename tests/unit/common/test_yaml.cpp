@@ -82,6 +82,8 @@ TEST(Yaml, LineRules) {
   EXPECT_EQ(n.find("a")->scalar, "x # y");
   EXPECT_EQ(n.find("b")->scalar, "it's fine");
   EXPECT_EQ(n.find("c")->scalar, "it's");
+  // A quote inside a plain word opens nothing.
+  EXPECT_EQ(yaml::parse("a: x-'y\nb: k:'v\n", "t.yaml").find("a")->scalar, "x-'y");
 }
 
 TEST(Yaml, WhatTheLibraryAddsIsRead) {

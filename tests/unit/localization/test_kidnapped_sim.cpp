@@ -16,7 +16,9 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <gtest/gtest.h>
+
 #include <unistd.h>
+#include "interbot_laser.h"
 
 #include <cmath>
 #include <filesystem>
@@ -35,21 +37,7 @@ fs::path scratch() {
   return d;
 }
 
-/** INTERBOT's Hokuyo UTM-30LX (ini/interbot.ini) at 10 Hz. */
-SensorParams hokuyo() {
-  SensorParams s;
-  s.label = "laser";
-  s.type = "lidar2d";
-  s.x = 0.15;
-  s.z = 0.19;
-  s.rate_hz = 10;
-  s.fov = 270;
-  s.beams = 1081;
-  s.range_min = 0.1;
-  s.range_max = 30;
-  s.noise_std = 0.03;
-  return s;
-}
+SensorParams hokuyo() { return fixtures::interbotLaser(10); }
 
 sim::SimulateResult simulateWalk(const std::string& out, std::vector<sim::Vec2> path, int seed) {
   sim::SimulateOptions o;

@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "interbot_laser.h"
+
 #include <cmath>
 #include <memory>
 #include <random>
@@ -27,21 +29,7 @@ std::shared_ptr<const sim::World> apartment() {
   return w;
 }
 
-/** INTERBOT's Hokuyo UTM-30LX (ini/interbot.ini), as test_kidnapped_sim.cpp. */
-SensorParams hokuyo() {
-  SensorParams s;
-  s.label = "laser";
-  s.type = "lidar2d";
-  s.x = 0.15;
-  s.z = 0.19;
-  s.rate_hz = 10;
-  s.fov = 270;
-  s.beams = 1081;
-  s.range_min = 0.1;
-  s.range_max = 30;
-  s.noise_std = 0.03;
-  return s;
-}
+SensorParams hokuyo() { return fixtures::interbotLaser(10); }
 
 /** ini/interbot.ini's [localization] with every 60th beam, an update per scan. */
 LocalizationParams params() {
