@@ -1,6 +1,7 @@
 // Perception per stage and per frame on a 512x424 walker frame (analytic scene
 // with a downward stair, a gutter and a wall), rrt-gpd against the baselines.
 #include "../unit/perception/scene.h"
+#include "../unit/perception/virtual_scans_baseline.h"
 
 #include <carenav/perception/pipeline.h>
 
@@ -70,6 +71,17 @@ static void BM_Kos(benchmark::State& st) {
   const auto f = fspfPlus(frame(), {0.2f, 0.f, 0.9f}, PerceptionParams{});
   for (auto _ : st) benchmark::DoNotOptimize(kinectObstacleScan(f.filtered, PerceptionParams{}));
 }
+// Before the speed work of issue 17 (tests/unit/perception/virtual_scans_baseline.h), measured in
+// the same run: docs/BENCHMARKS.md, 'Virtual scans: speed (issue 17)'.
+static void BM_FspfPlusBaseline(benchmark::State& st) {
+  for (auto _ : st)
+    benchmark::DoNotOptimize(fspfPlusBaseline(frame(), {0.2f, 0.f, 0.9f}, PerceptionParams{}));
+}
+static void BM_KosBaseline(benchmark::State& st) {
+  const auto f = fspfPlus(frame(), {0.2f, 0.f, 0.9f}, PerceptionParams{});
+  for (auto _ : st)
+    benchmark::DoNotOptimize(kinectObstacleScanBaseline(f.filtered, PerceptionParams{}));
+}
 static void BM_MaxRule(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(maxRuleScan(frame(), PerceptionParams{}));
 }
@@ -85,5 +97,7 @@ BENCHMARK(BM_GroundPlane_RansacOnly)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Ism)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FspfPlus)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Kos)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FspfPlusBaseline)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KosBaseline)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MaxRule)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -1,11 +1,19 @@
-#include <carenav/perception/ground_plane.h>
+// Virtual 2D scans from depth (docs/design.md, 'Virtual scans'): the Kinect Obstacle Scan
+// ([InterbotDepth, Alg. 7]), HOBBIT's max-rule scan ([Puente14, App. Sec. IV-A]) and MRPT's
+// convertTo2DScan baseline; FSPF+ is in fspf_plus.cpp. KOS bins without atan2 and in one pass
+// over the points (docs/BENCHMARKS.md, 'Virtual scans: speed'), with the bins and ranges of the
+// plain per-level implementation (tests/unit/perception/virtual_scans_baseline.h).
 #include <carenav/perception/virtual_scans.h>
 
 #include <mrpt/obs/T3DPointsTo2DScanParams.h>
 
 #include <algorithm>
 #include <cmath>
-#include <random>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
 
 namespace carenav::perception {
 
@@ -26,129 +34,6 @@ const char* planeClassName(PlaneClass c) {
     default:
       return "none";
   }
-}
-
-namespace {
-Eigen::Vector3d v3(const Point3f& p) { return {p.x, p.y, p.z}; }
-double dist(const Point3f& a, const Point3f& b) {
-  return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) +
-                   (a.z - b.z) * (a.z - b.z));
-}
-}  // namespace
-
-FspfResult fspfPlus(const Cloud& c, const Point3f& origin, const PerceptionParams& p) {
-  FspfResult r;
-  if (!c.organised()) return r;
-  const int W = static_cast<int>(c.width), H = static_cast<int>(c.height);
-  r.pixel_class.assign(c.points.size(), PlaneClass::None);
-  // depthConstraints: eligible pixels; list + position for O(1) removal.
-  std::vector<int> list, where(c.points.size(), -1);
-  for (size_t k = 0; k < c.points.size(); ++k) {
-    if (!validPoint(c.points[k])) continue;
-    const double d = dist(c.points[k], origin);
-    if (d < p.depth_min || d > p.depth_max) continue;
-    where[k] = static_cast<int>(list.size());
-    list.push_back(static_cast<int>(k));
-  }
-  r.eligible = list.size();
-  if (list.empty()) return r;
-  auto remove = [&](int k) {
-    const int pos = where[k];
-    if (pos < 0) return;
-    const int last = list.back();
-    list[pos] = last;
-    where[last] = pos;
-    list.pop_back();
-    where[k] = -1;
-  };
-  // Focal length (px) from the angle between horizontally adjacent pixels.
-  std::vector<double> ang;
-  for (size_t k = 0; k + 1 < c.points.size() && ang.size() < 2000; k += 97) {
-    if (where[k] < 0 || (k + 1) % W == 0 || where[k + 1] < 0) continue;
-    const Eigen::Vector3d a = v3(c.points[k]) - v3(origin), b = v3(c.points[k + 1]) - v3(origin);
-    const double t = std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0));
-    if (t > 1e-6) ang.push_back(t);
-  }
-  double f = W / (2 * std::tan(35.3 * M_PI / 180));  // Kinect One if nothing to measure
-  if (!ang.empty()) {
-    std::nth_element(ang.begin(), ang.begin() + ang.size() / 2, ang.end());
-    f = 1.0 / ang[ang.size() / 2];
-  }
-  std::mt19937 rng(static_cast<uint32_t>(p.seed));
-  const size_t n_required = static_cast<size_t>(p.fspf_stop_fraction * r.eligible);
-  const int max_iter = 20000;
-  const double cos_h = std::cos(25 * M_PI / 180);
-  while (list.size() > n_required && r.iterations < max_iter) {
-    ++r.iterations;
-    const int k0 = list[std::uniform_int_distribution<size_t>(0, list.size() - 1)(rng)];
-    const int u0 = k0 % W, v0 = k0 / W;
-    std::uniform_int_distribution<int> off(-p.fspf_omega, p.fspf_omega);
-    int ks[2] = {-1, -1};
-    for (int s = 0; s < 2; ++s)
-      for (int tries = 0; tries < 10 && ks[s] < 0; ++tries) {
-        const int u = u0 + off(rng), v = v0 + off(rng);
-        if (u < 0 || v < 0 || u >= W || v >= H) continue;
-        const int k = v * W + u;
-        if (where[k] >= 0 && k != k0) ks[s] = k;
-      }
-    if (ks[0] < 0 || ks[1] < 0 || ks[0] == ks[1]) {
-      remove(k0);  // no support around p0: it cannot seed a plane
-      continue;
-    }
-    const double zbar = (dist(c.points[k0], origin) + dist(c.points[ks[0]], origin) +
-                         dist(c.points[ks[1]], origin)) /
-                        3;
-    const int half = std::max(2, static_cast<int>(0.5 * p.fspf_window * f / zbar));
-    // imageSearchWindow3DPoints: eligible pixels of the window (sub-sampled
-    // for the hypotheses when the window is large).
-    const int stride = std::max(1, (2 * half + 1) / 40);
-    std::vector<Eigen::Vector3d> sample;
-    for (int v = std::max(0, v0 - half); v <= std::min(H - 1, v0 + half); v += stride)
-      for (int u = std::max(0, u0 - half); u <= std::min(W - 1, u0 + half); u += stride)
-        if (where[v * W + u] >= 0) sample.push_back(v3(c.points[v * W + u]));
-    auto rr = ransacPlane(sample, 20, p.fspf_epsilon, rng);
-    if (!rr.plane || rr.inliers * stride * stride < static_cast<size_t>(p.fspf_n_min)) {
-      remove(k0);
-      continue;
-    }
-    const Plane pl = *rr.plane;
-    std::vector<int> in;
-    Eigen::Vector3d cen = Eigen::Vector3d::Zero();
-    for (int v = std::max(0, v0 - half); v <= std::min(H - 1, v0 + half); ++v)
-      for (int u = std::max(0, u0 - half); u <= std::min(W - 1, u0 + half); ++u) {
-        const int k = v * W + u;
-        if (where[k] < 0) continue;
-        const Point3f& q = c.points[k];
-        if (pl.distance(q.x, q.y, q.z) <= p.fspf_epsilon) {
-          in.push_back(k);
-          cen += v3(q);
-        }
-      }
-    if (static_cast<int>(in.size()) <= p.fspf_n_min) {
-      remove(k0);
-      continue;
-    }
-    cen /= static_cast<double>(in.size());
-    // normalRectifier: plane class from normal and centroid (robot frame).
-    PlaneClass cls;
-    if (std::abs(pl.c) >= cos_h) {
-      cls = cen.z() < 0.1 ? PlaneClass::Ground
-                          : (cen.z() > origin.z ? PlaneClass::Ceiling : PlaneClass::Other);
-    } else if (std::abs(pl.a) >= std::abs(pl.b)) {
-      cls = PlaneClass::Front;
-    } else {
-      cls = cen.y() > 0 ? PlaneClass::LeftWall : PlaneClass::RightWall;
-    }
-    const bool drop = cls == PlaneClass::Ground || cls == PlaneClass::Ceiling;
-    drop ? ++r.planes_dropped : ++r.planes;
-    for (int k : in) {
-      r.pixel_class[k] = cls;
-      if (!drop) r.filtered.points.push_back(c.points[k]);
-      remove(k);
-    }
-  }
-  r.filtered.width = r.filtered.points.size();
-  return r;
 }
 
 mrpt::obs::CObservation2DRangeScan makeScan(const std::vector<float>& ranges, double height,
@@ -174,22 +59,72 @@ namespace {
 size_t binsFor(const PerceptionParams& p) {
   return static_cast<size_t>(std::lround(360.0 / p.scan_resolution));
 }
+
+/** Bearing bin of (x, y) as the virtual scans define it: floor((atan2f(y, x) + pi) / bin),
+ *  bin = 2 pi / n, clamped to n - 1. */
+size_t atanBin(float x, float y, size_t n) {
+  const double bin = 2 * M_PI / n;
+  return std::min(n - 1, static_cast<size_t>((std::atan2(y, x) + M_PI) / bin));
+}
+
 template <class Keep, class Better>
 std::vector<float> binRanges(const Cloud& c, size_t n, Keep keep, Better better) {
   std::vector<float> r(n, -1.f);
-  const double bin = 2 * M_PI / n;
   for (const auto& q : c.points) {
     if (!validPoint(q) || !keep(q)) continue;
     const float d = std::hypot(q.x, q.y);
-    const size_t b = std::min(n - 1, static_cast<size_t>((std::atan2(q.y, q.x) + M_PI) / bin));
+    const size_t b = atanBin(q.x, q.y, n);
     if (r[b] < 0 || better(d, r[b])) r[b] = d;
   }
   return r;
 }
-}  // namespace
 
-mrpt::obs::CObservation2DRangeScan kinectObstacleScan(const Cloud& c, const PerceptionParams& p) {
-  const size_t n = binsFor(p);
+/** Floats in their order as unsigned integers (-0 just below +0). */
+uint32_t floatKey(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, sizeof u);
+  return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+float keyFloat(uint32_t k) {
+  const uint32_t u = (k & 0x80000000u) ? (k & 0x7fffffffu) : ~k;
+  float f;
+  std::memcpy(&f, &u, sizeof f);
+  return f;
+}
+
+/** Floats z with |z - h| <= band, the test of the plain implementation (in double): an
+ *  interval of floats, found by bisection over the float order (near 0 it reaches below
+ *  -1e-17 for h = 0.1, band = 0.1). */
+struct ZBand {
+  float lo = 1, hi = 0;  // empty
+};
+ZBand floatBand(double h, double band) {
+  const auto in = [&](uint32_t k) {
+    return std::abs(static_cast<double>(keyFloat(k)) - h) <= band;
+  };
+  const float mid = static_cast<float>(h), far = static_cast<float>(std::abs(h) + band + 1);
+  if (!in(floatKey(mid))) return ZBand{};
+  uint32_t out = floatKey(-far), inside = floatKey(mid);  // smallest inside
+  while (inside - out > 1) {
+    const uint32_t m = out + (inside - out) / 2;
+    (in(m) ? inside : out) = m;
+  }
+  ZBand b;
+  b.lo = keyFloat(inside);
+  inside = floatKey(mid);  // largest inside
+  out = floatKey(far);
+  while (out - inside > 1) {
+    const uint32_t m = inside + (out - inside) / 2;
+    (in(m) ? inside : out) = m;
+  }
+  b.hi = keyFloat(inside);
+  return b;
+}
+
+/** KOS as the plain implementation runs it: one binRanges pass per level, merged by the
+ *  minimum. Only for clouds with a point at x = y = 0 in a band: its range 0 blocks its
+ *  bin in its level, which the single pass does not model. */
+std::vector<float> kosPerLevel(const Cloud& c, const PerceptionParams& p, size_t n) {
   std::vector<float> merged(n, -1.f);
   for (double h : p.kosHeights()) {
     auto lv = binRanges(
@@ -198,6 +133,133 @@ mrpt::obs::CObservation2DRangeScan kinectObstacleScan(const Cloud& c, const Perc
     for (size_t k = 0; k < n; ++k)
       if (lv[k] > 0 && (merged[k] < 0 || lv[k] < merged[k])) merged[k] = lv[k];
   }
+  return merged;
+}
+
+/** Per-thread state of kinectObstacleScan, kept between frames. */
+struct KosWork {
+  std::string heights;  ///< kos_heights and kos_band the bands below were made for
+  double band = -1;
+  std::vector<ZBand> bands;
+  std::vector<double> best2;  ///< per bin: smallest x^2 + y^2 so far
+  std::vector<long> best;     ///< per bin: index of that point, -1: none
+};
+
+void updateKosBands(const PerceptionParams& p, KosWork& w) {
+  if (w.heights == p.kos_heights && w.band == p.kos_band) return;
+  w.heights = p.kos_heights;
+  w.band = p.kos_band;
+  w.bands.clear();
+  for (double h : p.kosHeights()) w.bands.push_back(floatBand(h, p.kos_band));
+}
+
+constexpr size_t kChunk = 256;
+constexpr int32_t kSkip = -1, kExact = -2;  ///< Chunk::bin: not in the scan; bin by atanBin
+
+/** One chunk of points as arrays (the loops below vectorise on arrays, not on Point3f). */
+struct Chunk {
+  float x[kChunk], y[kChunk], z[kChunk];
+  double r2[kChunk];  ///< x^2 + y^2 (exact squares, one rounding: ordered as hypot)
+  float u[kChunk];    ///< (atan2(y, x) + pi) / bin, approximately
+  int32_t bin[kChunk];
+  uint8_t band[kChunk];
+};
+
+/** Per point j of pts[0, m): bin = its bearing bin, kSkip when invalid (validPoint) or in no
+ *  band, kExact when within `edge` bins of a bin edge or at x = y = 0. The bearing from
+ *  u = (atan2(y, x) + pi) / bin to within 4e-7 n bins (Cephes' atanf polynomial, error < 1e-6
+ *  rad; the quadrant by arithmetic blends, as a select would keep the compiler from vectorising
+ *  under trapping math). */
+void chunkBins(const Point3f* pts, size_t m, const std::vector<ZBand>& bands, float inv_bin,
+               float edge, int32_t n, Chunk& ch) {
+  constexpr float kPi = 3.14159265358979f, kTan8 = 0.414213562373f;
+  for (size_t j = 0; j < m; ++j) {
+    ch.x[j] = pts[j].x;
+    ch.y[j] = pts[j].y;
+    ch.z[j] = pts[j].z;
+    ch.band[j] = 0;
+  }
+  for (const ZBand& b : bands)
+    for (size_t j = 0; j < m; ++j) ch.band[j] |= (ch.z[j] >= b.lo) & (ch.z[j] <= b.hi);
+  for (size_t j = 0; j < m; ++j) {
+    const float x = ch.x[j], y = ch.y[j], z = ch.z[j];
+    const float ax = std::abs(x), ay = std::abs(y);
+    const bool keep = (ax < 1e6f) & (ay < 1e6f) & (std::abs(z) < 1e6f) &
+                      !((x == 0.f) & (y == 0.f) & (z == 0.f)) & (ch.band[j] != 0);
+    const float r = std::min(ax, ay) / std::max(std::max(ax, ay), 1e-30f);  // tan in [0, 1]
+    const float big = static_cast<float>(r > kTan8), rr = r + big * ((r - 1.f) / (r + 1.f) - r);
+    const float z2 = rr * rr;
+    const float a0 = (((8.05374449538e-2f * z2 - 1.38776856032e-1f) * z2 + 1.99777106478e-1f) * z2 -
+                      3.33329491539e-1f) *
+                         z2 * rr +
+                     rr + big * (0.25f * kPi);                                  // atan(r)
+    const float a1 = a0 + static_cast<float>(ay > ax) * (0.5f * kPi - 2 * a0);  // of (|x|, |y|)
+    const float a2 = a1 + static_cast<float>(x < 0.f) * (kPi - 2 * a1);
+    const float a3 = a2 - static_cast<float>(y < 0.f) * (2 * a2);  // atan2(y, x)
+    ch.u[j] = std::max(0.f, (a3 + kPi) * inv_bin);
+    ch.bin[j] = static_cast<int32_t>(ch.u[j]);
+    ch.band[j] = keep & !((ax == 0.f) & (ay == 0.f));  // 1: keep by u; 0: skip; 2 below
+    ch.band[j] |= (keep & (ax == 0.f) & (ay == 0.f)) << 1;
+    ch.r2[j] = static_cast<double>(x) * x + static_cast<double>(y) * y;
+  }
+  for (size_t j = 0; j < m; ++j) {  // a separate loop: fused with the one above it does not
+    const int32_t k = ch.bin[j];    // vectorise
+    const float fr = ch.u[j] - static_cast<float>(k);
+    const int32_t exact = static_cast<int32_t>(std::min(fr, 1.f - fr) < edge) |
+                          static_cast<int32_t>(k >= n) | static_cast<int32_t>(ch.band[j] == 2);
+    const int32_t kb = k + exact * (kExact - k);
+    ch.bin[j] = kb + static_cast<int32_t>(ch.band[j] == 0) * (kSkip - kb);
+  }
+}
+
+/** Per-bin minimum of r2 over one chunk; the running minimum stays in registers while the
+ *  points (neighbouring pixels of a plane) stay in one bin. False: a point at x = y = 0. */
+bool chunkMinimum(const Chunk& ch, size_t m, size_t i0, size_t n, double* best2, long* best) {
+  long cur = -1, cur_i = -1;
+  double cur2 = 0;
+  for (size_t j = 0; j < m; ++j) {
+    long b = ch.bin[j];
+    if (b == kSkip) continue;
+    if (b == kExact) {
+      if (ch.x[j] == 0 && ch.y[j] == 0) return false;
+      b = static_cast<long>(atanBin(ch.x[j], ch.y[j], n));
+    }
+    if (b != cur) {
+      if (cur >= 0) best2[cur] = cur2, best[cur] = cur_i;
+      cur = b;
+      cur2 = best2[b];
+      cur_i = best[b];
+    }
+    if (ch.r2[j] < cur2) cur2 = ch.r2[j], cur_i = static_cast<long>(i0 + j);
+  }
+  if (cur >= 0) best2[cur] = cur2, best[cur] = cur_i;
+  return true;
+}
+}  // namespace
+
+mrpt::obs::CObservation2DRangeScan kinectObstacleScan(const Cloud& c, const PerceptionParams& p) {
+  // Min over the levels of the min per level = min over the points in any band: one pass,
+  // squared ranges compared (ordered as hypot), hypot of the winner only.
+  const size_t n = binsFor(p);
+  thread_local KosWork w;
+  updateKosBands(p, w);
+  w.best2.assign(n, std::numeric_limits<double>::infinity());
+  w.best.assign(n, -1);
+  const Point3f* pts = c.points.data();
+  const float inv_bin = static_cast<float>(static_cast<double>(n) / (2 * M_PI));
+  // Error of u: < 1e-6 rad of angle and 2 ulp of u, i.e. < 4e-7 n bins; ten times that from an
+  // edge the bin is certain; nearer (0.6 % of the points at 0.5 deg) atanBin decides.
+  const float edge = std::max(1e-3f, 4e-6f * static_cast<float>(n));
+  thread_local Chunk ch;
+  for (size_t i0 = 0, m = c.points.size(); i0 < m; i0 += kChunk) {
+    const size_t mc = std::min(kChunk, m - i0);
+    chunkBins(pts + i0, mc, w.bands, inv_bin, edge, static_cast<int32_t>(n), ch);
+    if (!chunkMinimum(ch, mc, i0, n, w.best2.data(), w.best.data()))  // x = y = 0 in a band
+      return makeScan(kosPerLevel(c, p, n), 0.0, p.depth_max, "KOS");
+  }
+  std::vector<float> merged(n, -1.f);
+  for (size_t k = 0; k < n; ++k)
+    if (w.best[k] >= 0) merged[k] = std::hypot(pts[w.best[k]].x, pts[w.best[k]].y);
   return makeScan(merged, 0.0, p.depth_max, "KOS");
 }
 
