@@ -71,17 +71,62 @@ static void BM_Kos(benchmark::State& st) {
   const auto f = fspfPlus(frame(), {0.2f, 0.f, 0.9f}, PerceptionParams{});
   for (auto _ : st) benchmark::DoNotOptimize(kinectObstacleScan(f.filtered, PerceptionParams{}));
 }
-// Before the speed work of issue 17 (tests/unit/perception/virtual_scans_baseline.h), measured in
-// the same run: docs/BENCHMARKS.md, 'Virtual scans: speed (issue 17)'.
-static void BM_FspfPlusBaseline(benchmark::State& st) {
-  for (auto _ : st)
-    benchmark::DoNotOptimize(fspfPlusBaseline(frame(), {0.2f, 0.f, 0.9f}, PerceptionParams{}));
+// Virtual scans against the implementations before the speed work of issue 17
+// (tests/unit/perception/virtual_scans_baseline.h), measured in the same run: docs/BENCHMARKS.md,
+// 'Virtual scans: speed (issue 17)'. Frames: bench frame above; the same scene at the profiles'
+// [sim] depth_decimation 4 (128 x 106); a room (walls left, right and ahead, a box, a table top).
+namespace {
+enum class VsFrame { Stair, StairDecim4, Room };
+const Cloud& vsFrame(VsFrame f) {
+  static const Cloud decim4 = [] {
+    Scene s;
+    s.floor(-10, 1.5).floor(1.6, 2.2).floor(1.5, 1.6, -0.1).floor(2.2, 10, -0.17);
+    s.box({3.5, 3.7, -10, 10, -0.2, 2.5});
+    return renderDepth(s, walkerKinect(), 7, 1.0, nullptr, 128, 106);
+  }();
+  static const Cloud room = [] {
+    Scene s;
+    s.floor(-10, 10)
+        .box({2.5, 2.7, -10, 10, 0, 2.5})
+        .box({-10, 10, 1.2, 1.4, 0, 2.5})
+        .box({-10, 10, -1.6, -1.4, 0, 2.5})
+        .box({1.2, 1.4, -0.1, 0.1, 0, 0.4})
+        .box({1.6, 2.2, -1.0, -0.2, 0.7, 0.74});
+    return renderDepth(s, walkerKinect(), 11);
+  }();
+  return f == VsFrame::Stair ? frame() : (f == VsFrame::StairDecim4 ? decim4 : room);
 }
-static void BM_KosBaseline(benchmark::State& st) {
-  const auto f = fspfPlus(frame(), {0.2f, 0.f, 0.9f}, PerceptionParams{});
+template <bool kBaseline>
+void runFspf(benchmark::State& st, VsFrame fr) {
+  const Cloud& c = vsFrame(fr);
+  const PerceptionParams p;
   for (auto _ : st)
-    benchmark::DoNotOptimize(kinectObstacleScanBaseline(f.filtered, PerceptionParams{}));
+    benchmark::DoNotOptimize(kBaseline ? fspfPlusBaseline(c, {0.2f, 0.f, 0.9f}, p)
+                                       : fspfPlus(c, {0.2f, 0.f, 0.9f}, p));
+  st.counters["px"] = static_cast<double>(c.points.size());
 }
+template <bool kBaseline>
+void runKos(benchmark::State& st, VsFrame fr) {
+  const PerceptionParams p;
+  const Cloud filtered = fspfPlus(vsFrame(fr), {0.2f, 0.f, 0.9f}, p).filtered;
+  for (auto _ : st)
+    benchmark::DoNotOptimize(kBaseline ? kinectObstacleScanBaseline(filtered, p)
+                                       : kinectObstacleScan(filtered, p));
+  st.counters["points"] = static_cast<double>(filtered.points.size());
+}
+}  // namespace
+static void BM_FspfPlusBaseline(benchmark::State& s) { runFspf<true>(s, VsFrame::Stair); }
+static void BM_KosBaseline(benchmark::State& s) { runKos<true>(s, VsFrame::Stair); }
+static void BM_FspfPlus_Decim4(benchmark::State& s) { runFspf<false>(s, VsFrame::StairDecim4); }
+static void BM_FspfPlusBaseline_Decim4(benchmark::State& s) {
+  runFspf<true>(s, VsFrame::StairDecim4);
+}
+static void BM_Kos_Decim4(benchmark::State& s) { runKos<false>(s, VsFrame::StairDecim4); }
+static void BM_KosBaseline_Decim4(benchmark::State& s) { runKos<true>(s, VsFrame::StairDecim4); }
+static void BM_FspfPlus_Room(benchmark::State& s) { runFspf<false>(s, VsFrame::Room); }
+static void BM_FspfPlusBaseline_Room(benchmark::State& s) { runFspf<true>(s, VsFrame::Room); }
+static void BM_Kos_Room(benchmark::State& s) { runKos<false>(s, VsFrame::Room); }
+static void BM_KosBaseline_Room(benchmark::State& s) { runKos<true>(s, VsFrame::Room); }
 static void BM_MaxRule(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(maxRuleScan(frame(), PerceptionParams{}));
 }
@@ -99,5 +144,13 @@ BENCHMARK(BM_FspfPlus)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Kos)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FspfPlusBaseline)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_KosBaseline)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FspfPlus_Decim4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FspfPlusBaseline_Decim4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Kos_Decim4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KosBaseline_Decim4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FspfPlus_Room)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FspfPlusBaseline_Room)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Kos_Room)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KosBaseline_Room)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MaxRule)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -8,11 +8,15 @@
 #include <carenav/perception/ground_plane.h>
 #include <carenav/perception/virtual_scans.h>
 
+#include "float_order.h"
+
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
+#include <utility>
 
 namespace carenav::perception {
 
@@ -38,7 +42,6 @@ struct Soa {
 /** Per-thread buffers of fspfPlus, kept between frames (no allocation once warm). */
 struct FspfWork {
   std::vector<int> list, where;  ///< eligible pixels; position of a pixel in `list` or -1
-  std::vector<float> range;      ///< distance of each pixel to the sensor
   std::vector<double> ang;
   std::vector<int> in;
   Soa sample, inliers;
@@ -47,7 +50,7 @@ struct FspfWork {
 /** Points of `s` within `thr` of `pl` (Plane::distance, the same operation order). When
  *  `beat` >= 0, stops as soon as the count can no longer exceed `beat` and returns what it has
  *  (then <= beat). */
-size_t countInliers(const Soa& s, const Plane& pl, double thr, long beat) {
+CARENAV_VECTOR_CLONES size_t countInliers(const Soa& s, const Plane& pl, double thr, long beat) {
   const size_t n = s.size();
   const double* x = s.x.data();
   const double* y = s.y.data();
@@ -130,27 +133,47 @@ RansacResult ransacSoa(const Soa& s, Soa& inliers, int iterations, double thresh
   return r;
 }
 
+/** Squared sensor distance of q in float, the operations of the plain implementation's dist()
+ *  before its sqrt. */
+float squaredRange(const Point3f& q, const Point3f& o) {
+  return (q.x - o.x) * (q.x - o.x) + (q.y - o.y) * (q.y - o.y) + (q.z - o.z) * (q.z - o.z);
+}
+/** Distance to the sensor as the plain implementation's dist() gives it. */
+double range(const Point3f& q, const Point3f& o) { return std::sqrt(squaredRange(q, o)); }
+
+/** Squared-distance limits [lo, hi] equivalent to depth_min <= sqrtf(s) <= depth_max in double
+ *  (sqrtf is monotone): the depth test without a sqrt per pixel. */
+std::pair<float, float> squaredLimits(double dmin, double dmax) {
+  const float big = std::numeric_limits<float>::max();
+  const auto above = [&](float s) { return static_cast<double>(std::sqrt(s)) >= dmin; };
+  const auto below = [&](float s) { return static_cast<double>(std::sqrt(s)) <= dmax; };
+  const float lo = above(0.f) ? -1.f : (above(big) ? detail::lastInside(big, 0.f, above) : 2 * big);
+  const float hi = !below(0.f) ? -2.f : (below(big) ? big : detail::lastInside(0.f, big, below));
+  return {lo, hi};
+}
+
 /** depthConstraints: eligible pixels (valid, depth_min..depth_max from the sensor) into
- *  w.list / w.where, their distance into w.range. */
+ *  w.list / w.where. Branch-free: every pixel is written to the list's end, which advances for
+ *  the eligible ones. */
 void eligiblePixels(const Cloud& c, const Point3f& o, const PerceptionParams& p, FspfWork& w) {
   const size_t n = c.points.size();
-  w.range.resize(n);
-  w.where.assign(n, -1);
-  w.list.clear();
-  w.list.reserve(n);
+  const auto [lo, hi] = squaredLimits(p.depth_min, p.depth_max);
+  w.where.resize(n);
+  w.list.resize(n);
+  int* where = w.where.data();
+  int* list = w.list.data();
+  const Point3f* pts = c.points.data();
+  int count = 0;
   for (size_t k = 0; k < n; ++k) {
-    const Point3f& q = c.points[k];
-    // float arithmetic, as the plain implementation's dist()
-    w.range[k] = std::sqrt((q.x - o.x) * (q.x - o.x) + (q.y - o.y) * (q.y - o.y) +
-                           (q.z - o.z) * (q.z - o.z));
+    const Point3f& q = pts[k];
+    const float s = squaredRange(q, o);
+    const bool ok = (std::abs(q.x) < 1e6f) & (std::abs(q.y) < 1e6f) & (std::abs(q.z) < 1e6f) &
+                    !((q.x == 0.f) & (q.y == 0.f) & (q.z == 0.f)) & (s >= lo) & (s <= hi);
+    where[k] = ok ? count : -1;
+    list[count] = static_cast<int>(k);
+    count += ok ? 1 : 0;
   }
-  for (size_t k = 0; k < n; ++k) {
-    if (!validPoint(c.points[k])) continue;
-    const double d = w.range[k];
-    if (d < p.depth_min || d > p.depth_max) continue;
-    w.where[k] = static_cast<int>(w.list.size());
-    w.list.push_back(static_cast<int>(k));
-  }
+  w.list.resize(static_cast<size_t>(count));
 }
 
 /** Focal length (px) from the angle between horizontally adjacent pixels. */
@@ -260,8 +283,8 @@ FspfResult fspfPlus(const Cloud& c, const Point3f& origin, const PerceptionParam
       removePixel(w, k0);  // no support around p0: it cannot seed a plane
       continue;
     }
-    const double zbar = (static_cast<double>(w.range[k0]) + static_cast<double>(w.range[ks[0]]) +
-                         static_cast<double>(w.range[ks[1]])) /
+    const double zbar = (range(c.points[k0], origin) + range(c.points[ks[0]], origin) +
+                         range(c.points[ks[1]], origin)) /
                         3;
     const int half = std::max(2, static_cast<int>(0.5 * p.fspf_window * f / zbar));
     const Window win{std::max(0, u0 - half), std::min(W - 1, u0 + half), std::max(0, v0 - half),

@@ -5,12 +5,13 @@
 // plain per-level implementation (tests/unit/perception/virtual_scans_baseline.h).
 #include <carenav/perception/virtual_scans.h>
 
+#include "float_order.h"
+
 #include <mrpt/obs/T3DPointsTo2DScanParams.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -79,19 +80,6 @@ std::vector<float> binRanges(const Cloud& c, size_t n, Keep keep, Better better)
   return r;
 }
 
-/** Floats in their order as unsigned integers (-0 just below +0). */
-uint32_t floatKey(float f) {
-  uint32_t u;
-  std::memcpy(&u, &f, sizeof u);
-  return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
-}
-float keyFloat(uint32_t k) {
-  const uint32_t u = (k & 0x80000000u) ? (k & 0x7fffffffu) : ~k;
-  float f;
-  std::memcpy(&f, &u, sizeof f);
-  return f;
-}
-
 /** Floats z with |z - h| <= band, the test of the plain implementation (in double): an
  *  interval of floats, found by bisection over the float order (near 0 it reaches below
  *  -1e-17 for h = 0.1, band = 0.1). */
@@ -99,26 +87,10 @@ struct ZBand {
   float lo = 1, hi = 0;  // empty
 };
 ZBand floatBand(double h, double band) {
-  const auto in = [&](uint32_t k) {
-    return std::abs(static_cast<double>(keyFloat(k)) - h) <= band;
-  };
+  const auto in = [&](float z) { return std::abs(static_cast<double>(z) - h) <= band; };
   const float mid = static_cast<float>(h), far = static_cast<float>(std::abs(h) + band + 1);
-  if (!in(floatKey(mid))) return ZBand{};
-  uint32_t out = floatKey(-far), inside = floatKey(mid);  // smallest inside
-  while (inside - out > 1) {
-    const uint32_t m = out + (inside - out) / 2;
-    (in(m) ? inside : out) = m;
-  }
-  ZBand b;
-  b.lo = keyFloat(inside);
-  inside = floatKey(mid);  // largest inside
-  out = floatKey(far);
-  while (out - inside > 1) {
-    const uint32_t m = inside + (out - inside) / 2;
-    (in(m) ? inside : out) = m;
-  }
-  b.hi = keyFloat(inside);
-  return b;
+  if (!in(mid)) return ZBand{};
+  return ZBand{detail::lastInside(mid, -far, in), detail::lastInside(mid, far, in)};
 }
 
 /** KOS as the plain implementation runs it: one binRanges pass per level, merged by the
@@ -162,30 +134,30 @@ struct Chunk {
   double r2[kChunk];  ///< x^2 + y^2 (exact squares, one rounding: ordered as hypot)
   float u[kChunk];    ///< (atan2(y, x) + pi) / bin, approximately
   int32_t bin[kChunk];
-  uint8_t band[kChunk];
+  int32_t flag[kChunk];  ///< 0: skip; 1: in a band and finite; 2: that, and on an axis
 };
 
 /** Per point j of pts[0, m): bin = its bearing bin, kSkip when invalid (validPoint) or in no
- *  band, kExact when within `edge` bins of a bin edge or at x = y = 0. The bearing from
+ *  band, kExact when within `edge` bins of a bin edge or at x = y = 0 (then possibly (0, 0, 0),
+ *  invalid). The bearing from
  *  u = (atan2(y, x) + pi) / bin to within 4e-7 n bins (Cephes' atanf polynomial, error < 1e-6
  *  rad; the quadrant by arithmetic blends, as a select would keep the compiler from vectorising
  *  under trapping math). */
-void chunkBins(const Point3f* pts, size_t m, const std::vector<ZBand>& bands, float inv_bin,
-               float edge, int32_t n, Chunk& ch) {
+CARENAV_VECTOR_CLONES void chunkBins(const Point3f* pts, size_t m, const std::vector<ZBand>& bands,
+                                     float inv_bin, float edge, int32_t n, Chunk& ch) {
   constexpr float kPi = 3.14159265358979f, kTan8 = 0.414213562373f;
   for (size_t j = 0; j < m; ++j) {
     ch.x[j] = pts[j].x;
     ch.y[j] = pts[j].y;
     ch.z[j] = pts[j].z;
-    ch.band[j] = 0;
+    ch.flag[j] = 0;
   }
-  for (const ZBand& b : bands)
-    for (size_t j = 0; j < m; ++j) ch.band[j] |= (ch.z[j] >= b.lo) & (ch.z[j] <= b.hi);
+  for (const ZBand& b : bands)  // in a band: |z| < 1e6
+    for (size_t j = 0; j < m; ++j) ch.flag[j] |= (ch.z[j] >= b.lo) & (ch.z[j] <= b.hi);
   for (size_t j = 0; j < m; ++j) {
-    const float x = ch.x[j], y = ch.y[j], z = ch.z[j];
+    const float x = ch.x[j], y = ch.y[j];
     const float ax = std::abs(x), ay = std::abs(y);
-    const bool keep = (ax < 1e6f) & (ay < 1e6f) & (std::abs(z) < 1e6f) &
-                      !((x == 0.f) & (y == 0.f) & (z == 0.f)) & (ch.band[j] != 0);
+    const int32_t keep = ch.flag[j] & (ax < 1e6f) & (ay < 1e6f);            // (0, 0, 0): on an axis
     const float r = std::min(ax, ay) / std::max(std::max(ax, ay), 1e-30f);  // tan in [0, 1]
     const float big = static_cast<float>(r > kTan8), rr = r + big * ((r - 1.f) / (r + 1.f) - r);
     const float z2 = rr * rr;
@@ -196,19 +168,18 @@ void chunkBins(const Point3f* pts, size_t m, const std::vector<ZBand>& bands, fl
     const float a1 = a0 + static_cast<float>(ay > ax) * (0.5f * kPi - 2 * a0);  // of (|x|, |y|)
     const float a2 = a1 + static_cast<float>(x < 0.f) * (kPi - 2 * a1);
     const float a3 = a2 - static_cast<float>(y < 0.f) * (2 * a2);  // atan2(y, x)
-    ch.u[j] = std::max(0.f, (a3 + kPi) * inv_bin);
+    ch.u[j] = (a3 + kPi) * inv_bin;  // > -1: truncated to bin 0 and near its edge
     ch.bin[j] = static_cast<int32_t>(ch.u[j]);
-    ch.band[j] = keep & !((ax == 0.f) & (ay == 0.f));  // 1: keep by u; 0: skip; 2 below
-    ch.band[j] |= (keep & (ax == 0.f) & (ay == 0.f)) << 1;
+    ch.flag[j] = keep + (keep & (ax == 0.f) & (ay == 0.f));
     ch.r2[j] = static_cast<double>(x) * x + static_cast<double>(y) * y;
   }
   for (size_t j = 0; j < m; ++j) {  // a separate loop: fused with the one above it does not
     const int32_t k = ch.bin[j];    // vectorise
     const float fr = ch.u[j] - static_cast<float>(k);
     const int32_t exact = static_cast<int32_t>(std::min(fr, 1.f - fr) < edge) |
-                          static_cast<int32_t>(k >= n) | static_cast<int32_t>(ch.band[j] == 2);
+                          static_cast<int32_t>(k >= n) | static_cast<int32_t>(ch.flag[j] == 2);
     const int32_t kb = k + exact * (kExact - k);
-    ch.bin[j] = kb + static_cast<int32_t>(ch.band[j] == 0) * (kSkip - kb);
+    ch.bin[j] = kb + static_cast<int32_t>(ch.flag[j] == 0) * (kSkip - kb);
   }
 }
 
@@ -221,7 +192,10 @@ bool chunkMinimum(const Chunk& ch, size_t m, size_t i0, size_t n, double* best2,
     long b = ch.bin[j];
     if (b == kSkip) continue;
     if (b == kExact) {
-      if (ch.x[j] == 0 && ch.y[j] == 0) return false;
+      if (ch.x[j] == 0 && ch.y[j] == 0) {
+        if (ch.z[j] == 0) continue;  // (0, 0, 0): invalid
+        return false;
+      }
       b = static_cast<long>(atanBin(ch.x[j], ch.y[j], n));
     }
     if (b != cur) {
