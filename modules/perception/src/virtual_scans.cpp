@@ -139,10 +139,10 @@ struct Chunk {
 
 /** Per point j of pts[0, m): bin = its bearing bin, kSkip when invalid (validPoint) or in no
  *  band, kExact when within `edge` bins of a bin edge or at x = y = 0 (then possibly (0, 0, 0),
- *  invalid). The bearing from
- *  u = (atan2(y, x) + pi) / bin to within 4e-7 n bins (Cephes' atanf polynomial, error < 1e-6
- *  rad; the quadrant by arithmetic blends, as a select would keep the compiler from vectorising
- *  under trapping math). */
+ *  invalid). The bearing u = (atan2(y, x) + pi) / bin from Cephes' atanf polynomial, the
+ *  quadrant by arithmetic blends (a select would keep the compiler from vectorising under
+ *  trapping math). Error of u against atan2f, measured over 2e7 points for n = 120...7200:
+ *  < 1.3e-6 rad, < 2.1e-7 n bins; bounded here by 5e-7 n. */
 CARENAV_VECTOR_CLONES void chunkBins(const Point3f* pts, size_t m, const std::vector<ZBand>& bands,
                                      float inv_bin, float edge, int32_t n, Chunk& ch) {
   constexpr float kPi = 3.14159265358979f, kTan8 = 0.414213562373f;
@@ -221,9 +221,9 @@ mrpt::obs::CObservation2DRangeScan kinectObstacleScan(const Cloud& c, const Perc
   w.best.assign(n, -1);
   const Point3f* pts = c.points.data();
   const float inv_bin = static_cast<float>(static_cast<double>(n) / (2 * M_PI));
-  // Error of u: < 1e-6 rad of angle and 2 ulp of u, i.e. < 4e-7 n bins; ten times that from an
-  // edge the bin is certain; nearer (0.6 % of the points at 0.5 deg) atanBin decides.
-  const float edge = std::max(1e-3f, 4e-6f * static_cast<float>(n));
+  // Error of u < 5e-7 n bins (chunkBins); ten times that from an edge the bin is certain;
+  // nearer (0.7 % of the points at 0.5 deg) atanBin decides.
+  const float edge = std::max(1e-3f, 5e-6f * static_cast<float>(n));
   thread_local Chunk ch;
   for (size_t i0 = 0, m = c.points.size(); i0 < m; i0 += kChunk) {
     const size_t mc = std::min(kChunk, m - i0);

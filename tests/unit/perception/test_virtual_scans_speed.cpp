@@ -56,7 +56,7 @@ struct Frame {
   Point3f origin;
 };
 
-std::vector<Frame> frames() {
+std::vector<Frame> makeFrames() {
   const mrpt::poses::CPose3D low(0.1, 0, 0.6, 0.1, 20 * M_PI / 180, 3 * M_PI / 180);
   std::vector<Frame> f;
   f.push_back({renderDepth(stairScene(), walkerKinect()), {0.2f, 0.f, 0.9f}});
@@ -67,6 +67,12 @@ std::vector<Frame> frames() {
                {0.2f, 0.f, 0.9f}});
   f.push_back(
       {renderDepth(roomScene(), walkerKinect(), 2, 1.0, nullptr, 640, 480), {0.2f, 0.f, 0.9f}});
+  return f;
+}
+
+/** Rendered once (several tests use them). */
+const std::vector<Frame>& frames() {
+  static const std::vector<Frame> f = makeFrames();
   return f;
 }
 
@@ -115,7 +121,7 @@ TEST(VirtualScansSpeed, FspfGivesTheBaselinesPlanesOnEveryFrame) {
 }
 
 TEST(VirtualScansSpeed, FspfMatchesWithOtherSeedsAndTheOfflineStop) {
-  const auto f = frames();
+  const auto& f = frames();
   PerceptionParams p;
   p.fspf_stop_fraction = 0.01;  // the offline setting: many more iterations
   p.seed = 42;
@@ -127,6 +133,34 @@ TEST(VirtualScansSpeed, FspfMatchesWithOtherSeedsAndTheOfflineStop) {
   p.fspf_epsilon = 0.005;
   expectSameFspf(fspfPlus(f[2].cloud, f[2].origin, p),
                  fspfPlusBaseline(f[2].cloud, f[2].origin, p));
+}
+
+TEST(VirtualScansSpeed, FspfDepthLimitsExactlyOnPixelDistances) {
+  // depth_min and depth_max equal to two pixels' distances (float sqrt, as the plain dist()):
+  // those pixels stay eligible, their neighbours just beyond the limits do not.
+  const Frame& f = frames()[1];
+  const auto distance = [&](size_t k) {
+    const Point3f& q = f.cloud.points[k];
+    const Point3f& o = f.origin;
+    return static_cast<double>(std::sqrt((q.x - o.x) * (q.x - o.x) + (q.y - o.y) * (q.y - o.y) +
+                                         (q.z - o.z) * (q.z - o.z)));
+  };
+  PerceptionParams p;
+  const size_t W = f.cloud.width;
+  for (size_t near : {300 * W + 100, 350 * W + 256})
+    for (size_t far : {60 * W + 256, 100 * W + 400}) {
+      p.depth_min = distance(near);
+      p.depth_max = distance(far);
+      ASSERT_LT(p.depth_min, p.depth_max);
+      const auto ref = fspfPlusBaseline(f.cloud, f.origin, p);
+      EXPECT_LT(ref.eligible, f.cloud.points.size() * 9 / 10);
+      expectSameFspf(fspfPlus(f.cloud, f.origin, p), ref);
+      p.depth_min = std::nextafter(p.depth_min, 10.0);  // just above: that pixel drops out
+      p.depth_max = std::nextafter(p.depth_max, 0.0);
+      const auto ref2 = fspfPlusBaseline(f.cloud, f.origin, p);
+      EXPECT_LT(ref2.eligible, ref.eligible);
+      expectSameFspf(fspfPlus(f.cloud, f.origin, p), ref2);
+    }
 }
 
 TEST(VirtualScansSpeed, FspfOfAnUnorganisedOrEmptyFrameIsEmpty) {
@@ -151,76 +185,130 @@ TEST(VirtualScansSpeed, KosGivesTheBaselinesRangesOnFspfAndFullFrames) {
 }
 
 namespace {
-/** Points on and next to every bin edge (and the axes), at heights on and next to the band
- *  limits, plus random points, NaN and zero points. */
-Cloud edgeCloud(size_t n, const std::vector<float>& heights, unsigned seed) {
+Cloud unorganised(std::vector<Point3f> pts) {
   Cloud c;
-  const double bin = 2 * M_PI / static_cast<double>(n);
-  for (size_t k = 0; k <= n; ++k) {
-    const double a = -M_PI + static_cast<double>(k) * bin;
-    const double r = 0.5 + 3.0 * static_cast<double>(k % 7) / 7.0;
-    const float x = static_cast<float>(r * std::cos(a)), y = static_cast<float>(r * std::sin(a));
-    for (float z : heights)
-      for (float dx : {-1.f, 0.f, 1.f}) {
-        c.points.push_back({x, y, z});
-        c.points.push_back({std::nextafter(x, dx * 10), std::nextafter(y, -dx * 10), z});
-      }
-  }
-  for (float z : heights)
-    for (float v : {1.f, -1.f, 0.f, -0.f, 2.5f})
-      for (float w : {0.f, -0.f}) {
-        c.points.push_back({v, w, z});  // on the x axis, signed zeros
-        c.points.push_back({w, v, z});  // on the y axis
-      }
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-4, 4), zu(-0.5f, 1.5f);
-  for (int i = 0; i < 20000; ++i) c.points.push_back({u(rng), u(rng), zu(rng)});
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  c.points.push_back({nan, 1.f, 0.1f});
-  c.points.push_back({1.f, 1.f, nan});
-  c.points.push_back({0.f, 0.f, 0.f});
-  c.points.push_back({std::numeric_limits<float>::infinity(), 0.f, 0.1f});
+  c.points = std::move(pts);
   c.width = c.points.size();
   return c;
 }
 
-std::vector<float> bandEdges(const PerceptionParams& p) {
-  std::vector<float> z;
-  for (double h : p.kosHeights())
-    for (double e : {h - p.kos_band, h + p.kos_band, h}) {
-      const float f = static_cast<float>(e);
-      z.insert(z.end(), {f, std::nextafter(f, -10.f), std::nextafter(f, 10.f)});
+/** Sparse clouds in which each point is alone in the bins it could fall in, so that a point
+ *  put in the wrong bin (or kept or dropped wrongly) changes the scan: one point on every third
+ *  bin edge, exactly (to float) or shifted by `shift` ulp of x and y, range varying with k. */
+Cloud edgePoints(size_t n, size_t phase, int shift, float z) {
+  std::vector<Point3f> pts;
+  const double bin = 2 * M_PI / static_cast<double>(n);
+  for (size_t k = phase; k < n; k += 3) {
+    const double a = -M_PI + static_cast<double>(k) * bin,
+                 r = 0.6 + 0.01 * static_cast<double>(k % 300);
+    float x = static_cast<float>(r * std::cos(a)), y = static_cast<float>(r * std::sin(a));
+    for (int s = 0; s < std::abs(shift); ++s) {
+      x = std::nextafter(x, shift > 0 ? 10.f : -10.f);
+      y = std::nextafter(y, shift > 0 ? -10.f : 10.f);
     }
-  return z;
+    pts.push_back({x, y, z});
+  }
+  return unorganised(pts);
+}
+
+/** Heights on, just inside and just outside each band limit, each point alone in its bin. */
+Cloud bandLimitPoints(const PerceptionParams& p, size_t n) {
+  std::vector<float> zs;
+  for (double h : p.kosHeights())
+    for (double e : {h - p.kos_band, h + p.kos_band}) {
+      float f = static_cast<float>(e);
+      for (int k = 0; k < 3; ++k) f = std::nextafter(f, -10.f);
+      for (int k = 0; k < 7; ++k, f = std::nextafter(f, 10.f)) zs.push_back(f);
+    }
+  for (float f : {0.f, -0.f, -1e-30f, -1e-17f, -2e-17f, 1e-45f, -1e-45f}) zs.push_back(f);
+  std::vector<Point3f> pts;
+  const double bin = 2 * M_PI / static_cast<double>(n);
+  for (size_t i = 0; i < zs.size(); ++i) {
+    const double a = -M_PI + (3.0 * static_cast<double>(i % (n / 3)) + 1.5) * bin;
+    pts.push_back(
+        {static_cast<float>(2 * std::cos(a)), static_cast<float>(2 * std::sin(a)), zs[i]});
+  }
+  return unorganised(pts);
 }
 }  // namespace
 
-TEST(VirtualScansSpeed, KosMatchesOnBinEdgesBandLimitsAndOtherResolutions) {
-  for (double res : {0.5, 1.0, 0.25, 0.7, 3.0}) {  // 720, 360, 1440 bins; 514 and 120
-    SCOPED_TRACE(res);
+TEST(VirtualScansSpeed, KosBinsEveryEdgeAsAtan2fDoes) {
+  for (double res : {0.5, 1.0, 0.25, 0.7, 3.0, 1.6, 0.05}) {  // 720 ... 7200 bins, odd 225
     PerceptionParams p;
     p.scan_resolution = res;
     const size_t n = static_cast<size_t>(std::lround(360.0 / res));
-    const Cloud c = edgeCloud(n, bandEdges(p), 17);
-    expectSameScan(kinectObstacleScan(c, p), kinectObstacleScanBaseline(c, p));
+    for (size_t phase = 0; phase < 3; ++phase)
+      for (int shift : {0, 1, -1, 3, -3}) {
+        SCOPED_TRACE(std::to_string(n) + " bins, phase " + std::to_string(phase) + ", shift " +
+                     std::to_string(shift));
+        const Cloud c = edgePoints(n, phase, shift, 0.1f);
+        expectSameScan(kinectObstacleScan(c, p), kinectObstacleScanBaseline(c, p));
+      }
   }
+}
+
+TEST(VirtualScansSpeed, KosBinsTheAxesAndRandomPointsAsBefore) {
   PerceptionParams p;
-  p.kos_heights = "0.25 0.05";  // overlapping slabs, in any order
-  p.kos_band = 0.13;
-  const Cloud c = edgeCloud(720, bandEdges(p), 5);
+  std::vector<Point3f> axes;
+  for (float v : {1.f, -1.f, 2.5f, -3.f})
+    for (float zero : {0.f, -0.f}) axes.insert(axes.end(), {{v, zero, 0.3f}, {zero, v, 0.6f}});
+  for (double res : {0.5, 1.6, 0.7}) {
+    p.scan_resolution = res;
+    for (size_t i = 0; i < axes.size(); ++i) {  // one at a time: each alone in its bin
+      const Cloud c = unorganised({axes[i]});
+      expectSameScan(kinectObstacleScan(c, p), kinectObstacleScanBaseline(c, p));
+    }
+  }
+  p.scan_resolution = 0.5;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> u(-4, 4), zu(-0.5f, 1.5f);
+  std::vector<Point3f> pts;
+  for (int i = 0; i < 50000; ++i) pts.push_back({u(rng), u(rng), zu(rng)});
+  const float nan = std::numeric_limits<float>::quiet_NaN(),
+              inf = std::numeric_limits<float>::infinity();
+  pts.insert(pts.end(), {{nan, 1.f, 0.1f},
+                         {1.f, 1.f, nan},
+                         {0.f, 0.f, 0.f},
+                         {inf, 0.f, 0.1f},
+                         {1.f, -inf, 0.1f},
+                         {2e6f, 1.f, 0.1f},
+                         {1.f, 1.f, 2e6f}});
+  const Cloud c = unorganised(pts);
   expectSameScan(kinectObstacleScan(c, p), kinectObstacleScanBaseline(c, p));
 }
 
+TEST(VirtualScansSpeed, KosKeepsExactlyThePointsOfTheBands) {
+  for (const char* heights : {"0.1 0.3 0.6 0.9", "0.25 0.05", "0.0 1.7"}) {
+    PerceptionParams p;
+    p.kos_heights = heights;  // overlapping slabs, in any order; a slab centred on 0
+    for (double band : {0.1, 0.13, 0.001}) {
+      SCOPED_TRACE(std::string(heights) + " +- " + std::to_string(band));
+      p.kos_band = band;
+      const Cloud c = bandLimitPoints(p, 720);
+      ASSERT_LT(c.points.size(), 240u);  // each point alone in its bin
+      expectSameScan(kinectObstacleScan(c, p), kinectObstacleScanBaseline(c, p));
+    }
+  }
+}
+
 TEST(VirtualScansSpeed, KosPointAboveTheRobotBlocksItsBinInItsLevelAsBefore) {
-  // x = y = 0 in a band: range 0 in that level's bin (atan2 of zeros), which the per-level rule
-  // leaves invalid unless another level sees something there.
-  PerceptionParams p;
-  for (float z : {0.1f, 0.6f}) {
-    Cloud c;
-    c.points = {{0.f, 0.f, z},    {0.f, -0.f, 0.3f},  {-1.f, 0.f, 0.1f},  {-1.f, -0.f, 0.1f},
-                {1.f, 0.f, 0.6f}, {1.f, 1e-7f, 0.9f}, {2.f, -1e-7f, 0.6f}};
-    c.width = c.points.size();
-    expectSameScan(kinectObstacleScan(c, p), kinectObstacleScanBaseline(c, p));
+  // x = y = 0 in a band: range 0 in that level's bin (atan2 of signed zeros: 0, pi, -0, -pi),
+  // which the per-level rule leaves invalid unless another level sees something there. With 225
+  // bins (odd) the bin of bearing 0 has no edge at 0.
+  for (double res : {0.5, 1.6}) {
+    PerceptionParams p;
+    p.scan_resolution = res;
+    for (float sx : {0.f, -0.f})
+      for (float sy : {0.f, -0.f})
+        for (float z : {0.1f, 0.6f, 0.f}) {
+          const Cloud c = unorganised({{sx, sy, z},
+                                       {1.f, 0.f, 0.6f},
+                                       {-1.f, sy, 0.1f},
+                                       {-2.f, sy, 0.3f},
+                                       {1.f, 1e-7f, 0.9f},
+                                       {2.f, -1e-7f, 0.6f}});
+          expectSameScan(kinectObstacleScan(c, p), kinectObstacleScanBaseline(c, p));
+        }
   }
 }
 
