@@ -10,10 +10,12 @@
 /** Marks a loop-heavy function to be compiled twice, for AVX2 and for the baseline x86-64,
  *  the loader choosing by the CPU (GCC / Clang function multi-versioning on x86-64 Linux).
  *  Without FMA: each element gets the same operations, hence the same result, in both. */
-#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
-    !defined(__AVX2__)
+#if defined(__x86_64__) && defined(__linux__) && defined(__has_attribute) && !defined(__AVX2__)
+#if __has_attribute(target_clones)
 #define CARENAV_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#else
+#endif
+#endif
+#ifndef CARENAV_VECTOR_CLONES
 #define CARENAV_VECTOR_CLONES
 #endif
 

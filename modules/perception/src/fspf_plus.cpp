@@ -1,10 +1,11 @@
 // FSPF+ plane filtering ([InterbotDepth, Alg. 3], after FSPF [Biswas12]; docs/design.md,
 // 'Virtual scans'). Same draws, same arithmetic and the same planes as the plain implementation
 // kept in tests/unit/perception/virtual_scans_baseline.h; faster by (docs/BENCHMARKS.md, 'Virtual
-// scans: speed'): buffers reused from frame to frame (one workspace per thread), the distance of
-// each pixel to the sensor computed once, the window sample held as arrays of doubles, and a RANSAC
-// hypothesis abandoned as soon as it can no longer beat the best one (its count is only compared
-// with the best; the random draws stay those of ransacPlane).
+// scans: speed (issue 17)'): buffers reused from frame to frame (one workspace per thread), the
+// depth test on squared distances against equivalent float limits (no sqrt per pixel), the
+// window sample held as arrays of doubles, RANSAC's and fitPlane's sums written out in their
+// order, and a RANSAC hypothesis abandoned as soon as it can no longer beat the best one (its
+// count is only compared with the best; the random draws stay those of ransacPlane).
 #include <carenav/perception/ground_plane.h>
 #include <carenav/perception/virtual_scans.h>
 

@@ -30,7 +30,9 @@ struct FspfResult {
  * which are kept in a list (no rejection sampling). Plane classes from the normal and centroid in
  * the robot frame: horizontal planes within 0.1 m of the floor are ground, above the sensor
  * ceiling, other horizontal planes "other" (kept: table tops); vertical planes front / left / right
- * wall. An unorganised cloud gives an empty result. Deterministic for params.seed. */
+ * wall. An unorganised cloud gives an empty result. Deterministic for params.seed. Working
+ * buffers are kept per thread between calls (no allocation per frame but the result's);
+ * src/fspf_plus.cpp. */
 FspfResult fspfPlus(const Cloud& robot_frame, const Point3f& sensor_origin,
                     const PerceptionParams& p);
 
@@ -40,7 +42,8 @@ mrpt::obs::CObservation2DRangeScan makeScan(const std::vector<float>& ranges, do
                                             double max_range, const std::string& label);
 
 /** Kinect Obstacle Scan: points within +-kos_band of each kos_heights level,
- *  minimum range per bearing bin; levels merged by the minimum. */
+ *  minimum range per bearing bin; levels merged by the minimum. Computed in one vectorised pass
+ *  over the points for all levels, with the bins and ranges of the per-level definition. */
 mrpt::obs::CObservation2DRangeScan kinectObstacleScan(const Cloud& robot_frame,
                                                       const PerceptionParams& p);
 
