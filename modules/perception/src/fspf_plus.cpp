@@ -44,7 +44,7 @@ struct Soa {
 struct FspfWork {
   std::vector<int> list, where;  ///< eligible pixels; position of a pixel in `list` or -1
   std::vector<double> ang;
-  std::vector<int> in;
+  std::vector<int> in;  ///< window inliers (buffer of the largest window so far)
   Soa sample, inliers;
 };
 
@@ -153,6 +153,18 @@ std::pair<float, float> squaredLimits(double dmin, double dmax) {
   return {lo, hi};
 }
 
+/** ok[j] = 1 when pts[j] is valid (validPoint) and its squared distance to o is in [lo, hi]:
+ *  straight-line code the compiler vectorises. */
+CARENAV_VECTOR_CLONES void eligibleFlags(const Point3f* pts, size_t m, const Point3f& o, float lo,
+                                         float hi, int32_t* ok) {
+  for (size_t j = 0; j < m; ++j) {
+    const Point3f& q = pts[j];
+    const float s = squaredRange(q, o);
+    ok[j] = (std::abs(q.x) < 1e6f) & (std::abs(q.y) < 1e6f) & (std::abs(q.z) < 1e6f) &
+            !((q.x == 0.f) & (q.y == 0.f) & (q.z == 0.f)) & (s >= lo) & (s <= hi);
+  }
+}
+
 /** depthConstraints: eligible pixels (valid, depth_min..depth_max from the sensor) into
  *  w.list / w.where. Branch-free: every pixel is written to the list's end, which advances for
  *  the eligible ones. */
@@ -163,16 +175,17 @@ void eligiblePixels(const Cloud& c, const Point3f& o, const PerceptionParams& p,
   w.list.resize(n);
   int* where = w.where.data();
   int* list = w.list.data();
-  const Point3f* pts = c.points.data();
   int count = 0;
-  for (size_t k = 0; k < n; ++k) {
-    const Point3f& q = pts[k];
-    const float s = squaredRange(q, o);
-    const bool ok = (std::abs(q.x) < 1e6f) & (std::abs(q.y) < 1e6f) & (std::abs(q.z) < 1e6f) &
-                    !((q.x == 0.f) & (q.y == 0.f) & (q.z == 0.f)) & (s >= lo) & (s <= hi);
-    where[k] = ok ? count : -1;
-    list[count] = static_cast<int>(k);
-    count += ok ? 1 : 0;
+  constexpr size_t kChunk = 1024;
+  int32_t ok[kChunk];
+  for (size_t k0 = 0; k0 < n; k0 += kChunk) {
+    const size_t m = std::min(kChunk, n - k0);
+    eligibleFlags(c.points.data() + k0, m, o, lo, hi, ok);
+    for (size_t j = 0; j < m; ++j) {
+      where[k0 + j] = ok[j] ? count : -1;
+      list[count] = static_cast<int>(k0 + j);
+      count += ok[j];
+    }
   }
   w.list.resize(static_cast<size_t>(count));
 }
@@ -229,25 +242,29 @@ struct Window {
   int u0, u1, v0, v1;
 };
 
-/** Eligible pixels of `win` within epsilon of `pl` into w.in (row-major), their mean into
- *  `cen` (the same running sum as the plain implementation). */
-void windowInliers(const Cloud& c, const FspfWork& w, const Window& win, const Plane& pl,
-                   double eps, Eigen::Vector3d& cen, std::vector<int>& in) {
+/** Eligible pixels of `win` within epsilon of `pl` into in[0, count) (row-major; `in` holds
+ *  the window's area), their mean into `cen` (the running sum of the plain implementation:
+ *  adding +0.0 for the others leaves it unchanged, as it never is -0.0). Branch-free. */
+size_t windowInliers(const Cloud& c, const FspfWork& w, const Window& win, const Plane& pl,
+                     double eps, Eigen::Vector3d& cen, int* in) {
   const int W = static_cast<int>(c.width);
-  in.clear();
+  const int* where = w.where.data();
+  const Point3f* pts = c.points.data();
+  size_t count = 0;
   double cx = 0, cy = 0, cz = 0;
   for (int v = win.v0; v <= win.v1; ++v)
     for (int k = v * W + win.u0, k1 = v * W + win.u1; k <= k1; ++k) {
-      if (w.where[k] < 0) continue;
-      const Point3f& q = c.points[k];
-      if (std::abs(pl.a * q.x + pl.b * q.y + pl.c * q.z + pl.d) <= eps) {
-        in.push_back(k);
-        cx += q.x;
-        cy += q.y;
-        cz += q.z;
-      }
+      const Point3f& q = pts[k];
+      const bool ok =
+          (where[k] >= 0) & (std::abs(pl.a * q.x + pl.b * q.y + pl.c * q.z + pl.d) <= eps);
+      in[count] = k;
+      count += ok ? 1 : 0;
+      cx += ok ? static_cast<double>(q.x) : 0.0;
+      cy += ok ? static_cast<double>(q.y) : 0.0;
+      cz += ok ? static_cast<double>(q.z) : 0.0;
     }
   cen = {cx, cy, cz};
+  return count;
 }
 
 /** normalRectifier: plane class from the normal and the centroid (robot frame). */
@@ -307,16 +324,19 @@ FspfResult fspfPlus(const Cloud& c, const Point3f& origin, const PerceptionParam
     }
     const Plane pl = *rr.plane;
     Eigen::Vector3d cen;
-    windowInliers(c, w, win, pl, p.fspf_epsilon, cen, w.in);
-    if (static_cast<int>(w.in.size()) <= p.fspf_n_min) {
+    const size_t area = static_cast<size_t>(win.u1 - win.u0 + 1) * (win.v1 - win.v0 + 1);
+    if (w.in.size() < area) w.in.resize(area);
+    const size_t n_in = windowInliers(c, w, win, pl, p.fspf_epsilon, cen, w.in.data());
+    if (static_cast<int>(n_in) <= p.fspf_n_min) {
       removePixel(w, k0);
       continue;
     }
-    cen /= static_cast<double>(w.in.size());
+    cen /= static_cast<double>(n_in);
     const PlaneClass cls = classify(pl, cen, origin);
     const bool drop = cls == PlaneClass::Ground || cls == PlaneClass::Ceiling;
     drop ? ++r.planes_dropped : ++r.planes;
-    for (int k : w.in) {
+    for (size_t t = 0; t < n_in; ++t) {
+      const int k = w.in[t];
       r.pixel_class[k] = cls;
       if (!drop) r.filtered.points.push_back(c.points[k]);
       removePixel(w, k);
