@@ -90,7 +90,10 @@ ZBand floatBand(double h, double band) {
   const auto in = [&](float z) { return std::abs(static_cast<double>(z) - h) <= band; };
   const float mid = static_cast<float>(h), far = static_cast<float>(std::abs(h) + band + 1);
   if (!in(mid)) return ZBand{};
-  return ZBand{detail::lastInside(mid, -far, in), detail::lastInside(mid, far, in)};
+  // validPoint's |z| < 1e6 as well, so that a point in a band has a valid z
+  const float lim = std::nextafter(1e6f, 0.f);
+  return ZBand{std::max(-lim, detail::lastInside(mid, -far, in)),
+               std::min(lim, detail::lastInside(mid, far, in))};
 }
 
 /** KOS as the plain implementation runs it: one binRanges pass per level, merged by the

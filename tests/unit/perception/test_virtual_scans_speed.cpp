@@ -216,11 +216,14 @@ Cloud bandLimitPoints(const PerceptionParams& p, size_t n) {
   std::vector<float> zs;
   for (double h : p.kosHeights())
     for (double e : {h - p.kos_band, h + p.kos_band}) {
+      const float inf = std::numeric_limits<float>::infinity();
       float f = static_cast<float>(e);
-      for (int k = 0; k < 3; ++k) f = std::nextafter(f, -10.f);
-      for (int k = 0; k < 7; ++k, f = std::nextafter(f, 10.f)) zs.push_back(f);
+      for (int k = 0; k < 3; ++k) f = std::nextafter(f, -inf);
+      for (int k = 0; k < 7; ++k, f = std::nextafter(f, inf)) zs.push_back(f);
     }
-  for (float f : {0.f, -0.f, -1e-30f, -1e-17f, -2e-17f, 1e-45f, -1e-45f}) zs.push_back(f);
+  for (float f : {0.f, -0.f, -1e-30f, -1e-17f, -2e-17f, 1e-45f, -1e-45f, 1e6f, -1e6f,
+                  std::nextafter(1e6f, 0.f), std::nextafter(-1e6f, 0.f)})
+    zs.push_back(f);
   std::vector<Point3f> pts;
   const double bin = 2 * M_PI / static_cast<double>(n);
   for (size_t i = 0; i < zs.size(); ++i) {
@@ -278,9 +281,9 @@ TEST(VirtualScansSpeed, KosBinsTheAxesAndRandomPointsAsBefore) {
 }
 
 TEST(VirtualScansSpeed, KosKeepsExactlyThePointsOfTheBands) {
-  for (const char* heights : {"0.1 0.3 0.6 0.9", "0.25 0.05", "0.0 1.7"}) {
+  for (const char* heights : {"0.1 0.3 0.6 0.9", "0.25 0.05", "0.0 1.7", "1e6 -999999.95"}) {
     PerceptionParams p;
-    p.kos_heights = heights;  // overlapping slabs, in any order; a slab centred on 0
+    p.kos_heights = heights;  // overlapping slabs, in any order; centred on 0; at |z| = 1e6
     for (double band : {0.1, 0.13, 0.001}) {
       SCOPED_TRACE(std::string(heights) + " +- " + std::to_string(band));
       p.kos_band = band;
