@@ -1,0 +1,216 @@
+// carenav's ROS nodes on a real ROS master (rosmaster on a free loopback
+// port, never the default 11311): `carenav ros sim` + `carenav ros
+// navigate` drive Interbot to a goal in the apartment world with 0
+// collisions (the simulator's ground truth); killing the sim makes navigate
+// publish zero velocity within sensor_timeout + one control period (cmd_vel
+// as received by this test's own subscriber). Skipped without the ROS part.
+#include "cli_helpers.h"
+
+#ifdef CARENAV_TEST_WITH_ROS
+#include <geometry_msgs/Twist.h>
+#include <ros/ros.h>
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+
+#include <chrono>
+#include <mutex>
+#include <thread>
+
+extern char** environ;
+#endif
+
+namespace {
+
+using namespace carenav_test;
+
+#ifdef CARENAV_TEST_WITH_ROS
+
+/** A free TCP port on the loopback (never 11311). */
+int freePort() {
+  for (;;) {
+    const int s = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t n = sizeof a;
+    ::bind(s, reinterpret_cast<sockaddr*>(&a), n);
+    ::getsockname(s, reinterpret_cast<sockaddr*>(&a), &n);
+    ::close(s);
+    const int port = ntohs(a.sin_port);
+    if (port != 11311) return port;
+  }
+}
+
+bool accepts(int port) {
+  const int s = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const bool ok = ::connect(s, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  ::close(s);
+  return ok;
+}
+
+pid_t spawn(std::vector<std::string> args, const fs::path& log) {
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid = -1;
+  posix_spawnp(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  return pid;
+}
+
+int waitExit(pid_t pid) {
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+
+/** A rosmaster of its own for the test, and the environment that finds it. */
+class RosMaster {
+ public:
+  RosMaster() : port_(freePort()), dir_(scratch() / ("ros_" + std::to_string(port_))) {
+    fs::create_directories(dir_);
+    const std::string uri = "http://127.0.0.1:" + std::to_string(port_);
+    ::setenv("ROS_MASTER_URI", uri.c_str(), 1);
+    ::setenv("ROS_IP", "127.0.0.1", 1);
+    ::setenv("ROS_HOME", dir_.c_str(), 1);
+    pid_ = spawn({"rosmaster", "--core", "-p", std::to_string(port_)}, dir_ / "master.log");
+    while (pid_ > 0 && !accepts(port_) && ::kill(pid_, 0) == 0)
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ~RosMaster() {
+    if (pid_ > 0) ::kill(pid_, SIGTERM), waitExit(pid_);
+  }
+  bool up() const { return pid_ > 0 && accepts(port_); }
+  const fs::path& dir() const { return dir_; }
+
+ private:
+  int port_;
+  fs::path dir_;
+  pid_t pid_ = -1;
+};
+
+bool haveRosmaster() { return std::system("command -v rosmaster >/dev/null 2>&1") == 0; }
+
+const std::string kApartment = kSrc + "/maps/worlds/apartment.yaml";
+const std::string kInterbot = kSrc + "/ini/interbot.ini";
+
+pid_t startSim(const RosMaster& m, const std::string& start) {
+  return spawn({kBin, "-q", "ros", "sim", "--profile", kInterbot, "--world", kApartment, "--start",
+                start, "--summary", (m.dir() / "sim.json").string()},
+               m.dir() / "sim.log");
+}
+
+#define SKIP_WITHOUT_ROS() \
+  if (!haveRosmaster()) GTEST_SKIP() << "no rosmaster (Debian package python3-rosmaster)"
+#else
+#define SKIP_WITHOUT_ROS() GTEST_SKIP() << "built without the ROS part (CARENAV_WITH_ROS=OFF)"
+#endif
+
+TEST(CliRosNodes, SimAndNavigateReachTheGoalWithoutCollision) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  RosMaster master;
+  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
+  const pid_t sim = startSim(master, "1.5,1.5,0");
+  const auto out = master.dir() / "nav";
+  // --duration bounds the run (the node's own clock), not the test.
+  const pid_t nav = spawn(
+      {kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--world", kApartment, "--start",
+       "1.5,1.5,0", "--goal", "3.5,3.8,90", "--duration", "120", "--out", out.string()},
+      master.dir() / "nav.log");
+  const int nav_code = waitExit(nav);
+  ::kill(sim, SIGINT);
+  EXPECT_EQ(waitExit(sim), 0) << slurp(master.dir() / "sim.log");
+  EXPECT_EQ(nav_code, 0) << slurp(master.dir() / "nav.log");
+  const std::string summary = slurp(out / "summary.json");
+  EXPECT_NE(summary.find("\"outcome\": \"goal reached\""), std::string::npos) << summary;
+  const std::string truth = slurp(master.dir() / "sim.json");
+  EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
+  std::smatch mx, my;
+  ASSERT_TRUE(std::regex_search(truth, mx, std::regex("\"x\": ([-0-9.e]+)"))) << truth;
+  ASSERT_TRUE(std::regex_search(truth, my, std::regex("\"y\": ([-0-9.e]+)"))) << truth;
+  EXPECT_LT(std::hypot(std::stod(mx[1]) - 3.5, std::stod(my[1]) - 3.8), 0.6)
+      << "the true pose is at the goal (tolerance 0.5 m)";
+#endif
+}
+
+TEST(CliRosNodes, KillingTheSimStopsTheRobot) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  RosMaster master;
+  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
+  // This test's own subscriber: every cmd_vel with its arrival time.
+  struct Cmd {
+    std::chrono::steady_clock::time_point t;
+    double v, w;
+  };
+  std::mutex mu;
+  std::vector<Cmd> cmds;
+  int argc = 1;
+  char name[] = "test";
+  char* argv[] = {name, nullptr};
+  ::ros::init(argc, argv, "carenav_test_listener", ::ros::init_options::NoSigintHandler);
+  ::ros::NodeHandle nh;
+  auto sub = nh.subscribe<geometry_msgs::Twist>(
+      "cmd_vel", 100, [&](const geometry_msgs::Twist::ConstPtr& m) {
+        std::lock_guard<std::mutex> l(mu);
+        cmds.push_back({std::chrono::steady_clock::now(), m->linear.x, m->angular.z});
+      });
+  ::ros::AsyncSpinner spinner(1);
+  spinner.start();
+  const pid_t sim = startSim(master, "1.0,1.5,0");
+  const pid_t nav =
+      spawn({kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--world", kApartment,
+             "--start", "1.0,1.5,0", "--goal", "4.2,1.5,0", "--duration", "60"},
+            master.dir() / "nav.log");
+  // Until the robot drives (a command above 5 cm/s), then the sim is killed.
+  auto moving = [&] {
+    std::lock_guard<std::mutex> l(mu);
+    return !cmds.empty() && cmds.back().v > 0.05;
+  };
+  while (!moving() && ::kill(nav, 0) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_TRUE(moving()) << slurp(master.dir() / "nav.log");
+  ::kill(sim, SIGKILL);
+  const auto killed = std::chrono::steady_clock::now();
+  waitExit(sim);
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  ::kill(nav, SIGINT);
+  waitExit(nav);
+  spinner.stop();
+  ::ros::shutdown();
+  // sensor_timeout 0.5 s + one control period 0.1 s (+ delivery): from then on zero.
+  const auto bound = killed + std::chrono::milliseconds(750);
+  std::lock_guard<std::mutex> l(mu);
+  size_t after = 0;
+  for (const auto& c : cmds) {
+    if (c.t <= bound) continue;
+    ++after;
+    EXPECT_EQ(c.v, 0.0);
+    EXPECT_EQ(c.w, 0.0);
+  }
+  EXPECT_GT(after, 5u) << "navigate goes on publishing (zero) every period";
+  for (const auto& c : cmds)
+    if (c.t > killed && c.v == 0 && c.w == 0) {
+      std::cout << "first zero cmd_vel "
+                << std::chrono::duration<double, std::milli>(c.t - killed).count()
+                << " ms after the sim was killed\n";
+      break;
+    }
+#endif
+}
+
+}  // namespace
