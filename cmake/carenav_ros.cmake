@@ -22,6 +22,11 @@ if(NOT CARENAV_WITH_ROS STREQUAL "OFF")
       list(APPEND _missing lib${_l})
     endif()
   endforeach()
+  # bz2-compressed chunks of bags
+  find_package(BZip2 QUIET)
+  if(NOT BZIP2_FOUND)
+    list(APPEND _missing libbz2-dev)
+  endif()
   # Message packages are headers only.
   foreach(_h ros/ros.h rosbag/bag.h sensor_msgs/LaserScan.h nav_msgs/Odometry.h nav_msgs/Path.h geometry_msgs/Twist.h
              tf2_msgs/TFMessage.h rosgraph_msgs/Clock.h std_msgs/String.h roslz4/lz4s.h)
