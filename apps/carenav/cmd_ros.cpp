@@ -43,8 +43,12 @@ void addSim(CLI::App& ros, const GlobalOptions& g) {
   cmd->add_option("--rate", o->rate, "Simulation steps per second")->capture_default_str();
   cmd->add_option("--duration", o->duration, "Seconds; 0: until stopped")->capture_default_str();
   cmd->add_option("--summary", o->summary, "JSON written at the end: truth pose, collisions");
+  cmd->add_option("--record", o->record,
+                  "Bag of what the node publishes (odom, scans, tf, ground_truth)");
   cmd->allow_extras();
   cmd->callback([o, start, cmd, &g] {
+    if (!o->summary.empty()) prepareOutputFile(o->summary, "--summary");
+    if (!o->record.empty()) prepareOutputFile(o->record, "--record");
     o->start = poseOption(*start, "--start");
     o->ros_args = cmd->remaining();
     o->stop = &g_ros_stop;

@@ -108,9 +108,10 @@ const std::string kApartment = kSrc + "/maps/worlds/apartment.yaml";
 const std::string kInterbot = kSrc + "/ini/interbot.ini";
 
 pid_t startSim(const RosMaster& m, const std::string& start) {
-  return spawn({kBin, "-q", "ros", "sim", "--profile", kInterbot, "--world", kApartment, "--start",
-                start, "--summary", (m.dir() / "sim.json").string()},
-               m.dir() / "sim.log");
+  return spawn(
+      {kBin, "-q", "ros", "sim", "--profile", kInterbot, "--world", kApartment, "--start", start,
+       "--summary", (m.dir() / "sim.json").string(), "--record", (m.dir() / "sim.bag").string()},
+      m.dir() / "sim.log");
 }
 
 #define SKIP_WITHOUT_ROS() \
@@ -144,6 +145,13 @@ TEST(CliRosNodes, SimAndNavigateReachTheGoalWithoutCollision) {
   ASSERT_TRUE(std::regex_search(truth, my, std::regex("\"y\": ([-0-9.e]+)"))) << truth;
   EXPECT_LT(std::hypot(std::stod(mx[1]) - 3.5, std::stod(my[1]) - 3.8), 0.6)
       << "the true pose is at the goal (tolerance 0.5 m)";
+  // The run recorded by the sim maps as a bag: its scans, odometry and tf.
+  const auto bag = master.dir() / "sim.bag";
+  const auto slam = carenav_test::carenav({"-q", "slam", "--profile", kInterbot, "--rawlog",
+                                           bag.string(), "--out", (master.dir() / "map").string()});
+  EXPECT_EQ(slam.code, 0) << slam.err;
+  const std::string map_summary = slurp(master.dir() / "map" / "summary.json");
+  EXPECT_GT(jsonNumber(map_summary, "steps"), 50u) << map_summary;
 #endif
 }
 

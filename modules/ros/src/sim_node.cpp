@@ -12,6 +12,7 @@
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <rosbag/bag.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/LaserScan.h>
 #include <tf2_msgs/TFMessage.h>
@@ -55,6 +56,12 @@ class SimNode {
     tf_ = nh_.advertise<tf2_msgs::TFMessage>("tf", 50);
     clock_ = nh_.advertise<rosgraph_msgs::Clock>("clock", 10);
     cmd_ = nh_.subscribe("cmd_vel", 10, &SimNode::onCmd, this);
+    if (!o.record.empty()) {
+      bag_ = std::make_unique<rosbag::Bag>(o.record, rosbag::bagmode::Write);
+    }
+  }
+  ~SimNode() {
+    if (bag_) bag_->close();
   }
   void run();
 
@@ -64,6 +71,12 @@ class SimNode {
     last_cmd_ = ::ros::WallTime::now();
   }
   void publish(const sim::SimFrame& f, const ::ros::Time& now);
+  /** Publishes `m` and records it (when recording). */
+  template <class M>
+  void send(::ros::Publisher& p, const M& m, const ::ros::Time& now) {
+    p.publish(m);
+    if (bag_) bag_->write(p.getTopic(), now, m);
+  }
   nav_msgs::Odometry odometry(const sim::Pose2& p, const std::string& frame,
                               const ::ros::Time& now) const;
   geometry_msgs::TransformStamped link(const std::string& parent, const std::string& child,
@@ -77,6 +90,7 @@ class SimNode {
   ::ros::Publisher odom_, truth_, tf_, clock_;
   ::ros::Subscriber cmd_;
   ::ros::WallTime last_cmd_;
+  std::unique_ptr<rosbag::Bag> bag_;
 };
 
 nav_msgs::Odometry SimNode::odometry(const sim::Pose2& p, const std::string& frame,
@@ -104,8 +118,8 @@ geometry_msgs::TransformStamped SimNode::link(const std::string& parent, const s
 }
 
 void SimNode::publish(const sim::SimFrame& f, const ::ros::Time& now) {
-  odom_.publish(odometry(f.odometry, o_.odom_frame, now));
-  truth_.publish(odometry(f.truth, o_.map_frame, now));
+  send(odom_, odometry(f.odometry, o_.odom_frame, now), now);
+  send(truth_, odometry(f.truth, o_.map_frame, now), now);
   tf2_msgs::TFMessage tf;
   tf.transforms.push_back(link(o_.odom_frame, o_.base_frame,
                                CPose3D(f.odometry.x, f.odometry.y, 0, f.odometry.yaw, 0, 0), now));
@@ -115,10 +129,10 @@ void SimNode::publish(const sim::SimFrame& f, const ::ros::Time& now) {
     // The scan in its own frame: the sensor pose goes to tf.
     auto m = scanToRos(*scan, scan->sensorLabel);
     m.header.stamp = now;
-    lidars_[scan->sensorLabel].publish(m);
+    send(lidars_[scan->sensorLabel], m, now);
     tf.transforms.push_back(link(o_.base_frame, scan->sensorLabel, poses_[scan->sensorLabel], now));
   }
-  tf_.publish(tf);
+  send(tf_, tf, now);
 }
 
 void SimNode::run() {

@@ -30,6 +30,9 @@ struct SimNodeOptions {
   double duration = 0;       ///< s; 0: until stopped
   double cmd_timeout = 0.5;  ///< s
   std::string summary;       ///< JSON written at the end: truth, collisions, distance
+  /** A bag of what the node publishes (odom, scans, tf, ground_truth), as
+   *  `rosbag record` would write it (rosbag storage); empty: none. */
+  std::string record;
   std::string odom_frame = "odom", base_frame = "base_link", map_frame = "map";
   std::vector<std::string> ros_args;
   const std::atomic<bool>* stop = nullptr;
