@@ -77,6 +77,8 @@ void addNavigate(CLI::App& ros, const GlobalOptions& g) {
   cmd->add_option("--rate", o->control_rate, "Control rate (Hz)")->capture_default_str();
   cmd->add_option("--duration", o->duration, "Seconds; 0: until the goal is reached");
   cmd->add_flag("--stay", o->stay, "After a goal, wait for the next one");
+  cmd->add_flag("--on-scan", o->cycle_on_scan,
+                "Run the control cycle on each scan (the timer only as a fallback)");
   cmd->add_option("--out", o->out_dir, "Folder for run.png, navlog.csv, summary.json");
   cmd->allow_extras();
   cmd->callback([o, start, cmd, &g] {

@@ -10,18 +10,9 @@
 #include <geometry_msgs/Twist.h>
 #include <ros/ros.h>
 
-#include <arpa/inet.h>
-#include <fcntl.h>
-#include <netinet/in.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/socket.h>
-
-#include <chrono>
 #include <mutex>
-#include <thread>
 
-extern char** environ;
+#include "ros_master.h"
 #endif
 
 namespace {
@@ -29,78 +20,7 @@ namespace {
 using namespace carenav_test;
 
 #ifdef CARENAV_TEST_WITH_ROS
-
-/** A free TCP port on the loopback (never 11311). */
-int freePort() {
-  for (;;) {
-    const int s = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    socklen_t n = sizeof a;
-    ::bind(s, reinterpret_cast<sockaddr*>(&a), n);
-    ::getsockname(s, reinterpret_cast<sockaddr*>(&a), &n);
-    ::close(s);
-    const int port = ntohs(a.sin_port);
-    if (port != 11311) return port;
-  }
-}
-
-bool accepts(int port) {
-  const int s = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<uint16_t>(port));
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  const bool ok = ::connect(s, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-  ::close(s);
-  return ok;
-}
-
-pid_t spawn(std::vector<std::string> args, const fs::path& log) {
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid = -1;
-  posix_spawnp(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  return pid;
-}
-
-int waitExit(pid_t pid) {
-  int st = 0;
-  ::waitpid(pid, &st, 0);
-  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-}
-
-/** A rosmaster of its own for the test, and the environment that finds it. */
-class RosMaster {
- public:
-  RosMaster() : port_(freePort()), dir_(scratch() / ("ros_" + std::to_string(port_))) {
-    fs::create_directories(dir_);
-    const std::string uri = "http://127.0.0.1:" + std::to_string(port_);
-    ::setenv("ROS_MASTER_URI", uri.c_str(), 1);
-    ::setenv("ROS_IP", "127.0.0.1", 1);
-    ::setenv("ROS_HOME", dir_.c_str(), 1);
-    pid_ = spawn({"rosmaster", "--core", "-p", std::to_string(port_)}, dir_ / "master.log");
-    while (pid_ > 0 && !accepts(port_) && ::kill(pid_, 0) == 0)
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  ~RosMaster() {
-    if (pid_ > 0) ::kill(pid_, SIGTERM), waitExit(pid_);
-  }
-  bool up() const { return pid_ > 0 && accepts(port_); }
-  const fs::path& dir() const { return dir_; }
-
- private:
-  int port_;
-  fs::path dir_;
-  pid_t pid_ = -1;
-};
+using namespace carenav_ros_test;
 
 bool haveRosmaster() { return std::system("command -v rosmaster >/dev/null 2>&1") == 0; }
 
@@ -123,7 +43,7 @@ pid_t startSim(const RosMaster& m, const std::string& start) {
 TEST(CliRosNodes, SimAndNavigateReachTheGoalWithoutCollision) {
   SKIP_WITHOUT_ROS();
 #ifdef CARENAV_TEST_WITH_ROS
-  RosMaster master;
+  RosMaster master(scratch());
   ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
   const pid_t sim = startSim(master, "1.5,1.5,0");
   const auto out = master.dir() / "nav";
@@ -158,7 +78,7 @@ TEST(CliRosNodes, SimAndNavigateReachTheGoalWithoutCollision) {
 TEST(CliRosNodes, KillingTheSimStopsTheRobot) {
   SKIP_WITHOUT_ROS();
 #ifdef CARENAV_TEST_WITH_ROS
-  RosMaster master;
+  RosMaster master(scratch());
   ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
   // This test's own subscriber: every cmd_vel with its arrival time.
   struct Cmd {

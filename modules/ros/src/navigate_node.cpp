@@ -15,6 +15,7 @@
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <std_msgs/String.h>
@@ -85,7 +86,7 @@ class NavigateNode {
   std::optional<SensorParams> lidar_;
   const ::ros::WallTime wall0_ = ::ros::WallTime::now();
   const double t0_ = ::ros::Time::now().toSec();
-  bool have_odom_ = false, reached_ = false, route_sent_ = false;
+  bool have_odom_ = false, reached_ = false, route_sent_ = false, scan_arrived_ = false;
   TPose2D odom_pose_;
   std::optional<navigation::Twist> intent_cmd_;
   double intent_t_ = 0;
@@ -98,6 +99,7 @@ void NavigateNode::onScan(const sensor_msgs::LaserScan& m) {
   const mrpt::poses::CPose3D pose(l.x, l.y, l.z, mrpt::DEG2RAD(l.yaw), mrpt::DEG2RAD(l.pitch),
                                   mrpt::DEG2RAD(l.roll));
   s_.observation(scanFromRos(m, l.label, pose), odom_pose_, t(m.header.stamp));
+  scan_arrived_ = true;
 }
 
 void NavigateNode::onOdom(const nav_msgs::Odometry& m) {
@@ -172,21 +174,30 @@ bool NavigateNode::cycle() {
   return true;
 }
 
+// Cycles at the control rate (or on each scan), messages handled while
+// waiting for the next; on every way out a last zero command.
 std::string NavigateNode::run() {
-  ::ros::WallRate rate(o_.control_rate);
+  const double period = 1.0 / o_.control_rate;
+  double next = elapsed();
   std::string why = "stopped";
+  auto* queue = ::ros::getGlobalCallbackQueue();
   while (::ros::ok()) {
     if (o_.stop && o_.stop->load()) break;
     if (o_.duration > 0 && elapsed() >= o_.duration) {
       why = "duration over";
       break;
     }
-    ::ros::spinOnce();
+    queue->callAvailable(::ros::WallDuration(std::max(0.0, next - elapsed())));
+    const double now = elapsed();
+    if (now < next && !(o_.cycle_on_scan && scan_arrived_)) continue;
+    scan_arrived_ = false;
     if (!cycle()) {
       why = reached_ ? "goal reached" : "gave up: " + s_.gaveUpNote();
       break;
     }
-    rate.sleep();
+    // The timer: the next period, never closer than 0.9 periods after a late
+    // cycle (on scans: one period after the last cycle, a fallback).
+    next = o_.cycle_on_scan ? now + period : std::max(next + period, now + 0.9 * period);
   }
   cmd_.publish(geometry_msgs::Twist());  // whatever ended the run, the robot stands
   say("ended: " + why);

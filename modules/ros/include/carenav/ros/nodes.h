@@ -59,7 +59,11 @@ struct NavigateNodeOptions {
   double control_rate = 10;  ///< Hz
   double duration = 0;       ///< s; 0: until the goal is reached, or stopped
   bool stay = false;         ///< after a goal, wait for the next one instead of ending
-  std::string out_dir;       ///< run.png, navlog.csv, summary.json
+  /** Run the control cycle as soon as a scan arrives (its command follows
+   *  it at once), with the timer only as a fallback one period after the
+   *  last cycle (so stale data still stops the robot). */
+  bool cycle_on_scan = false;
+  std::string out_dir;  ///< run.png, navlog.csv, summary.json
   std::string odom_frame = "odom", map_frame = "map";
   std::vector<std::string> ros_args;
   const std::atomic<bool>* stop = nullptr;
