@@ -13,7 +13,7 @@ if(NOT CARENAV_WITH_ROS STREQUAL "OFF")
   set(_missing "")
   set(CARENAV_ROS_LIBRARIES "")
   foreach(_l roscpp roscpp_serialization rostime cpp_common rosconsole rosbag_storage roslz4
-             console_bridge)
+             console_bridge xmlrpcpp)
     find_library(CARENAV_ROS_LIB_${_l} ${_l})
     mark_as_advanced(CARENAV_ROS_LIB_${_l})
     if(CARENAV_ROS_LIB_${_l})

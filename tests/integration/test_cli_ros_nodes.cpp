@@ -48,10 +48,10 @@ TEST(CliRosNodes, SimAndNavigateReachTheGoalWithoutCollision) {
   const pid_t sim = startSim(master, "1.5,1.5,0");
   const auto out = master.dir() / "nav";
   // --duration bounds the run (the node's own clock), not the test.
-  const pid_t nav = spawn(
-      {kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--world", kApartment, "--start",
-       "1.5,1.5,0", "--goal", "3.5,3.8,90", "--duration", "120", "--out", out.string()},
-      master.dir() / "nav.log");
+  const pid_t nav = spawn({kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--world",
+                           kApartment, "--start", "1.5,1.5,0", "--goal", "3.5,3.8,90", "--duration",
+                           "120", "--out", out.string(), "_robot/v_max:=0.2"},
+                          master.dir() / "nav.log");
   const int nav_code = waitExit(nav);
   ::kill(sim, SIGINT);
   EXPECT_EQ(waitExit(sim), 0) << slurp(master.dir() / "sim.log");
@@ -65,6 +65,19 @@ TEST(CliRosNodes, SimAndNavigateReachTheGoalWithoutCollision) {
   ASSERT_TRUE(std::regex_search(truth, my, std::regex("\"y\": ([-0-9.e]+)"))) << truth;
   EXPECT_LT(std::hypot(std::stod(mx[1]) - 3.5, std::stod(my[1]) - 3.8), 0.6)
       << "the true pose is at the goal (tolerance 0.5 m)";
+  // ~robot/v_max (a private parameter) is the profile's [robot] v_max: 0.2, not 0.25.
+  std::istringstream log(slurp(out / "navlog.csv"));
+  std::string line;
+  std::getline(log, line);
+  double vmax = 0;
+  while (std::getline(log, line)) {
+    std::istringstream row(line);
+    std::string cell;
+    for (int i = 0; i <= 11; ++i) std::getline(row, cell, ',');
+    vmax = std::max(vmax, std::stod(cell));
+  }
+  EXPECT_GT(vmax, 0.15);
+  EXPECT_LE(vmax, 0.2 + 1e-9) << "~robot/v_max 0.2 is applied";
   // The run recorded by the sim maps as a bag: its scans, odometry and tf.
   const auto bag = master.dir() / "sim.bag";
   const auto slam = carenav_test::carenav({"-q", "slam", "--profile", kInterbot, "--rawlog",
@@ -138,6 +151,22 @@ TEST(CliRosNodes, KillingTheSimStopsTheRobot) {
                 << " ms after the sim was killed\n";
       break;
     }
+#endif
+}
+
+TEST(CliRosNodes, PrivateParametersAreProfileKeys) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  RosMaster master(scratch());
+  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
+  // ~navigation/no_such_key is [navigation] no_such_key: refused as the
+  // profile refuses it (exit 2). (A parameter taken: the test above.)
+  const pid_t bad = spawn({kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--world",
+                           kApartment, "--start", "1.5,1.5,0", "_navigation/no_such_key:=1"},
+                          master.dir() / "bad.log");
+  EXPECT_EQ(waitExit(bad), 2) << slurp(master.dir() / "bad.log");
+  EXPECT_NE(slurp(master.dir() / "bad.log").find("no_such_key"), std::string::npos)
+      << slurp(master.dir() / "bad.log");
 #endif
 }
 

@@ -19,6 +19,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <std_msgs/String.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <cmath>
 
@@ -56,6 +57,10 @@ class NavigateNode {
     cmd_ = nh_.advertise<geometry_msgs::Twist>("cmd_vel", 5);
     path_ = nh_.advertise<nav_msgs::Path>("plan", 1, true);
     status_ = pnh_.advertise<std_msgs::String>("status", 5, true);
+    if (s.setup().localise) {
+      pose_ = pnh_.advertise<geometry_msgs::PoseStamped>("pose", 5);
+      tf_ = nh_.advertise<tf2_msgs::TFMessage>("tf", 10);
+    }
   }
   /** Runs the control loop; the reason it ended. */
   std::string run();
@@ -77,12 +82,13 @@ class NavigateNode {
   bool cycle();
   void say(const std::string& text);
   void publishPath();
+  void publishPose();
 
   const NavigateNodeOptions& o_;
   NavigationSession& s_;
   ::ros::NodeHandle nh_, pnh_;
   ::ros::Subscriber scan_, odom_, goal_, intent_;
-  ::ros::Publisher cmd_, path_, status_;
+  ::ros::Publisher cmd_, path_, status_, pose_, tf_;
   std::optional<SensorParams> lidar_;
   const ::ros::WallTime wall0_ = ::ros::WallTime::now();
   const double t0_ = ::ros::Time::now().toSec();
@@ -144,6 +150,29 @@ void NavigateNode::publishPath() {
   route_sent_ = true;
 }
 
+// Where the localiser puts the robot: ~pose and map -> odom on tf.
+void NavigateNode::publishPose() {
+  if (!pose_ || !have_odom_) return;
+  const TPose2D mp = s_.navigator().mapPose();
+  const ::ros::Time now = ::ros::Time::now();
+  geometry_msgs::PoseStamped p;
+  p.header.stamp = now;
+  p.header.frame_id = o_.map_frame;
+  p.pose.position.x = mp.x;
+  p.pose.position.y = mp.y;
+  p.pose.orientation = yawQuaternion(mp.phi);
+  pose_.publish(p);
+  const mrpt::poses::CPose2D map_odom =
+      mrpt::poses::CPose2D(mp) + (-mrpt::poses::CPose2D(odom_pose_));
+  geometry_msgs::TransformStamped t;
+  t.header = p.header;
+  t.child_frame_id = o_.odom_frame;
+  t.transform = transformOf(mrpt::poses::CPose3D(map_odom));
+  tf2_msgs::TFMessage tf;
+  tf.transforms.push_back(t);
+  tf_.publish(tf);
+}
+
 // One control period: false when the run ends (goal reached, gave up).
 bool NavigateNode::cycle() {
   const double now = elapsed();
@@ -160,6 +189,7 @@ bool NavigateNode::cycle() {
   cmd.angular.z = st.cycle.decision.cmd.w;
   cmd_.publish(cmd);
   publishPath();
+  publishPose();
   if (st.cycle.decision.action == navigation::SafetyAction::Stop &&
       !st.cycle.decision.reason.empty())
     say("stop: " + st.cycle.decision.reason);
@@ -207,7 +237,12 @@ std::string NavigateNode::run() {
 }  // namespace
 
 navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o) {
-  auto setup = navigation::sessionSetup(o.profile, o.sets, o.plugin);
+  auto setup = navigation::sessionSetup(o.profile, o.sets, o.plugin);  // bad input: before ROS
+  initRosNode("carenav_navigate", o.ros_args);
+  if (auto sets = privateParamOverrides(); !sets.empty()) {
+    sets.insert(sets.end(), o.sets.begin(), o.sets.end());
+    setup = navigation::sessionSetup(o.profile, sets, o.plugin);
+  }
   std::optional<mrpt::maps::COccupancyGridMap2D> grid;
   if (!o.map.empty() || !o.world.empty()) grid = loadMap(o);
   setup.name = "ros";
@@ -230,7 +265,6 @@ navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o) {
   const auto goal = grid ? goalFromText(o, *grid) : std::nullopt;
   if (goal && !session.setGoals({{*goal, ""}}, false, 0, {o.start->x, o.start->y}))
     throw InputError(setup.origin + ": no route from the start to the goal");
-  initRosNode("carenav_navigate", o.ros_args);
   NavigateNode node(o, session);
   const std::string why = node.run();
   session.finishMetrics();

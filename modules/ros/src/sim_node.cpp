@@ -172,7 +172,12 @@ void writeSummary(const SimNodeOptions& o, const sim::Simulator& sim) {
 
 void runSimNode(const SimNodeOptions& o) {
   const SimWorld w = simWorld(o);
-  auto setup = navigation::sessionSetup(o.profile, o.sets, "");
+  auto setup = navigation::sessionSetup(o.profile, o.sets, "");  // bad input: before ROS
+  initRosNode("carenav_sim", o.ros_args);
+  if (auto sets = privateParamOverrides(); !sets.empty()) {
+    sets.insert(sets.end(), o.sets.begin(), o.sets.end());
+    setup = navigation::sessionSetup(o.profile, sets, "");
+  }
   auto simp = setup.profile.section<sim::SimParams>("sim");
   auto world = std::make_shared<const sim::World>(sim::loadWorld(w.world, simp.wall_height));
   std::vector<SensorParams> lidars;
@@ -183,7 +188,6 @@ void runSimNode(const SimNodeOptions& o) {
   sim.reset({w.start.x, w.start.y, w.start.phi});
   if (sim.footprintBlocked({w.start.x, w.start.y, w.start.phi}, 0))
     throw InputError(w.world + ": the start pose puts the robot on an obstacle of the world");
-  initRosNode("carenav_sim", o.ros_args);
   {
     SimNode node(o, sim);
     if (!o.quiet) std::cerr << "carenav ros sim: " << w.world << ", publishing\n";

@@ -4,6 +4,7 @@
 // RawlogError naming the file and the byte, after what was before it.
 #include <carenav/io/rawlog_reader.h>
 #include <carenav/ros/bag.h>
+#include <carenav/ros/nodes.h>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>
 
@@ -174,4 +175,15 @@ TEST(RosBag, DamagedBagsAreRawlogErrors) {
   }
 }
 
+}  // namespace
+
+namespace {
+// ~ parameters as profile keys (nodes.h): every '/' but the last is a '.'.
+TEST(RosParams, PrivateParametersBecomeProfileOverrides) {
+  using carenav::ros::overrideFromParam;
+  EXPECT_EQ(overrideFromParam("navigation/v_max", "0.3"), "navigation.v_max=0.3");
+  EXPECT_EQ(overrideFromParam("sensor/laser/x", "0.1"), "sensor.laser.x=0.1");
+  EXPECT_EQ(overrideFromParam("nav/recovery/enabled", "false"), "nav.recovery.enabled=false");
+  EXPECT_EQ(overrideFromParam("v_max", "1"), "");
+}
 }  // namespace

@@ -76,4 +76,15 @@ navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o);
 void initRosNode(const std::string& name, const std::vector<std::string>& ros_args,
                  double wait_s = 10);
 
+/** The node's private parameters as profile overrides: `~navigation/v_max`
+ *  -> "navigation.v_max=VALUE", `~sensor/laser/x` -> "sensor.laser.x=VALUE"
+ *  (every '/' but the last becomes '.'; ROS names have no dots). Call after
+ *  initRosNode; command-line --set values go after these and win. */
+std::vector<std::string> privateParamOverrides();
+
+/** "section.key=value" from a parameter's name below the node's namespace
+ *  and its value as text (exposed for tests); "" for a name without a
+ *  section. */
+std::string overrideFromParam(const std::string& relative_name, const std::string& value);
+
 }  // namespace carenav::ros
