@@ -77,6 +77,9 @@ void addNavigate(CLI::App& ros, const GlobalOptions& g) {
   cmd->add_option("--rate", o->control_rate, "Control rate (Hz)")->capture_default_str();
   cmd->add_option("--duration", o->duration, "Seconds; 0: until the goal is reached");
   cmd->add_flag("--stay", o->stay, "After a goal, wait for the next one");
+  cmd->add_flag("--external-pose", o->external_pose,
+                "Take the map pose from amcl_pose (carenav ros localize, amcl) instead of "
+                "localising here");
   cmd->add_flag("--on-scan", o->cycle_on_scan,
                 "Run the control cycle on each scan (the timer only as a fallback)");
   cmd->add_option("--out", o->out_dir, "Folder for run.png, navlog.csv, summary.json");
@@ -95,11 +98,37 @@ void addNavigate(CLI::App& ros, const GlobalOptions& g) {
   });
 }
 
+void addLocalize(CLI::App& ros, const GlobalOptions& g) {
+  auto o = std::make_shared<ros::LocalizeNodeOptions>();
+  auto start = std::make_shared<std::string>();
+  auto* cmd = ros.add_subcommand(
+      "localize",
+      "Monte Carlo localisation on a known map as a ROS node: subscribes scan, odom, "
+      "initialpose; publishes amcl_pose, particlecloud and map -> odom on tf.");
+  cmd->add_option("--profile", o->profile, "Robot profile ([localization], its lidar2d)")
+      ->required();
+  cmd->add_option("--set", o->sets, "Profile override section.key=value (repeatable)");
+  cmd->add_option("--map", o->map, "Static map (gridmap, ROS YAML, ...)");
+  cmd->add_option("--world", o->world, "Or a simulator world's map");
+  cmd->add_option("--start", *start, "Start pose x,y,deg (default: global, over the free cells)");
+  cmd->add_option("--duration", o->duration, "Seconds; 0: until stopped");
+  cmd->allow_extras();
+  cmd->callback([o, start, cmd, &g] {
+    o->start = poseOption(*start, "--start");
+    o->ros_args = cmd->remaining();
+    o->stop = &g_ros_stop;
+    o->quiet = g.quiet;
+    stopOnSignals();
+    ros::runLocalizeNode(*o);
+  });
+}
+
 void addRosCommand(CLI::App& app, const GlobalOptions& g) {
   auto* cmd = app.add_subcommand("ros", "carenav as ROS 1 nodes (docs/ros.md)");
   cmd->require_subcommand(1);
   addSim(*cmd, g);
   addNavigate(*cmd, g);
+  addLocalize(*cmd, g);
 }
 
 }  // namespace

@@ -170,4 +170,36 @@ TEST(CliRosNodes, PrivateParametersAreProfileKeys) {
 #endif
 }
 
+TEST(CliRosNodes, SimLocalizeNavigateReachTheGoal) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  RosMaster master(scratch());
+  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
+  const pid_t sim = startSim(master, "1.5,1.5,0");
+  const pid_t loc = spawn({kBin, "-q", "ros", "localize", "--profile", kInterbot, "--world",
+                           kApartment, "--start", "1.5,1.5,0"},
+                          master.dir() / "loc.log");
+  // navigate is told a start 1 m off: only the localiser's amcl_pose takes
+  // the robot to the goal in truth.
+  const auto out = master.dir() / "nav";
+  const pid_t nav = spawn({kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--world",
+                           kApartment, "--start", "1.5,2.5,0", "--goal", "3.5,3.8,90",
+                           "--external-pose", "--duration", "120", "--out", out.string()},
+                          master.dir() / "nav.log");
+  const int nav_code = waitExit(nav);
+  ::kill(sim, SIGINT);
+  ::kill(loc, SIGINT);
+  EXPECT_EQ(waitExit(sim), 0) << slurp(master.dir() / "sim.log");
+  EXPECT_EQ(waitExit(loc), 0) << slurp(master.dir() / "loc.log");
+  EXPECT_EQ(nav_code, 0) << slurp(master.dir() / "nav.log");
+  const std::string truth = slurp(master.dir() / "sim.json");
+  EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
+  std::smatch mx, my;
+  ASSERT_TRUE(std::regex_search(truth, mx, std::regex("\"x\": ([-0-9.e]+)"))) << truth;
+  ASSERT_TRUE(std::regex_search(truth, my, std::regex("\"y\": ([-0-9.e]+)"))) << truth;
+  EXPECT_LT(std::hypot(std::stod(mx[1]) - 3.5, std::stod(my[1]) - 3.8), 0.6)
+      << "the true pose is at the goal: navigate followed amcl_pose";
+#endif
+}
+
 }  // namespace

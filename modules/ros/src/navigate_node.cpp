@@ -12,6 +12,7 @@
 #include "msg_convert.h"
 
 #include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
@@ -54,6 +55,7 @@ class NavigateNode {
     odom_ = nh_.subscribe("odom", 20, &NavigateNode::onOdom, this);
     goal_ = nh_.subscribe("move_base_simple/goal", 2, &NavigateNode::onGoal, this);
     if (s.walker()) intent_ = nh_.subscribe("intent", 5, &NavigateNode::onIntent, this);
+    if (o.external_pose) amcl_ = nh_.subscribe("amcl_pose", 5, &NavigateNode::onPose, this);
     cmd_ = nh_.advertise<geometry_msgs::Twist>("cmd_vel", 5);
     path_ = nh_.advertise<nav_msgs::Path>("plan", 1, true);
     status_ = pnh_.advertise<std_msgs::String>("status", 5, true);
@@ -75,6 +77,12 @@ class NavigateNode {
   void onScan(const sensor_msgs::LaserScan& m);
   void onOdom(const nav_msgs::Odometry& m);
   void onGoal(const geometry_msgs::PoseStamped& m);
+  /** A localiser's pose (amcl_pose): the navigator's map pose from now on
+   *  (it follows odometry from there). */
+  void onPose(const geometry_msgs::PoseWithCovarianceStamped& m) {
+    const auto& p = m.pose.pose;
+    s_.navigator().setMapPose({p.position.x, p.position.y, yawOf(p.orientation)});
+  }
   void onIntent(const geometry_msgs::Twist& m) {
     intent_cmd_ = navigation::Twist{m.linear.x, m.angular.z};
     intent_t_ = elapsed();
@@ -87,7 +95,7 @@ class NavigateNode {
   const NavigateNodeOptions& o_;
   NavigationSession& s_;
   ::ros::NodeHandle nh_, pnh_;
-  ::ros::Subscriber scan_, odom_, goal_, intent_;
+  ::ros::Subscriber scan_, odom_, goal_, intent_, amcl_;
   ::ros::Publisher cmd_, path_, status_, pose_, tf_;
   std::optional<SensorParams> lidar_;
   const ::ros::WallTime wall0_ = ::ros::WallTime::now();
@@ -248,7 +256,7 @@ navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o) {
   setup.name = "ros";
   setup.origin = !o.world.empty() ? o.world : o.map;
   setup.map = grid ? &*grid : nullptr;
-  setup.localise = grid && o.start;
+  setup.localise = grid && o.start && !o.external_pose;
   setup.start = o.start;
   setup.control_rate = o.control_rate;
   setup.out_dir = o.out_dir;

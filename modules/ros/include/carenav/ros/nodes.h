@@ -63,6 +63,10 @@ struct NavigateNodeOptions {
    *  it at once), with the timer only as a fallback one period after the
    *  last cycle (so stale data still stops the robot). */
   bool cycle_on_scan = false;
+  /** Take the robot's map pose from `amcl_pose` (e.g. `carenav ros
+   *  localize`) instead of localising in the node; needs --map/--world and
+   *  --start (until the first pose arrives). */
+  bool external_pose = false;
   std::string out_dir;  ///< run.png, navlog.csv, summary.json
   std::string odom_frame = "odom", map_frame = "map";
   std::vector<std::string> ros_args;
@@ -70,6 +74,25 @@ struct NavigateNodeOptions {
   bool progress = false;
 };
 navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o);
+
+/** `carenav ros localize`: Monte Carlo localisation on a known map (the
+ *  `localize` command's Localizer). Subscribes `scan`, `odom`, `initialpose`
+ *  (geometry_msgs/PoseWithCovarianceStamped: starts again there); publishes
+ *  `amcl_pose` (geometry_msgs/PoseWithCovarianceStamped, amcl's convention),
+ *  `particlecloud` (geometry_msgs/PoseArray) and `map -> odom` on `tf`. */
+struct LocalizeNodeOptions {
+  std::string profile;
+  std::vector<std::string> sets;
+  std::string map, world;                    ///< the map (as navigate)
+  std::optional<navigation::TPose2D> start;  ///< else a global start
+  double duration = 0;                       ///< s; 0: until stopped
+  size_t cloud_max = 500;                    ///< particles published at most
+  std::string odom_frame = "odom", map_frame = "map";
+  std::vector<std::string> ros_args;
+  const std::atomic<bool>* stop = nullptr;
+  bool quiet = false;
+};
+void runLocalizeNode(const LocalizeNodeOptions& o);
 
 /** ros::init with the node's name and ROS arguments (once per process);
  *  throws InputError when the master cannot be reached within `wait_s`. */
