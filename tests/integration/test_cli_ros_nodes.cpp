@@ -202,4 +202,51 @@ TEST(CliRosNodes, SimLocalizeNavigateReachTheGoal) {
 #endif
 }
 
+TEST(CliRosNodes, WalkerFollowsTheIntentTopic) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  RosMaster master(scratch());
+  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
+  int argc = 1;
+  char name[] = "test";
+  char* argv[] = {name, nullptr};
+  ::ros::init(argc, argv, "carenav_test_user", ::ros::init_options::NoSigintHandler);
+  ::ros::NodeHandle nh;
+  auto intent = nh.advertise<geometry_msgs::Twist>("intent", 5);
+  const pid_t sim = startSim(master, "1.5,1.5,0");
+  // Interbot driven as a walker (user-intent-dwa): the user's Twist on `intent`.
+  const pid_t nav = spawn({kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--plugin",
+                           "user-intent-dwa", "--duration", "60"},
+                          master.dir() / "nav.log");
+  while (intent.getNumSubscribers() == 0 && ::kill(nav, 0) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  geometry_msgs::Twist push;
+  push.linear.x = 0.2;
+  const auto push0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < 40; ++i) {  // 4 s of pushing forwards, then the user lets go
+    intent.publish(push);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const double push_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - push0).count();
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  ::kill(sim, SIGINT);
+  EXPECT_EQ(waitExit(sim), 0) << slurp(master.dir() / "sim.log");
+  ::kill(nav, SIGINT);
+  waitExit(nav);
+  ::ros::shutdown();
+  const std::string truth = slurp(master.dir() / "sim.json");
+  EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
+  std::smatch mx, my;
+  ASSERT_TRUE(std::regex_search(truth, mx, std::regex("\"x\": ([-0-9.e]+)"))) << truth;
+  ASSERT_TRUE(std::regex_search(truth, my, std::regex("\"y\": ([-0-9.e]+)"))) << truth;
+  // 0.2 m/s while pushed and intent_timeout (0.5 s) after, straight on, then
+  // it stands (2 s more at 0.2 m/s would be 0.4 m further).
+  EXPECT_GT(std::stod(mx[1]), 1.5 + 0.4) << truth;
+  EXPECT_LT(std::stod(mx[1]), 1.5 + 0.2 * (push_s + 0.5) + 0.1)
+      << "it stands once the user lets go; pushed " << push_s << " s: " << truth;
+  EXPECT_NEAR(std::stod(my[1]), 1.5, 0.1) << truth;
+#endif
+}
+
 }  // namespace
