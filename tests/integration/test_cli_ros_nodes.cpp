@@ -8,6 +8,7 @@
 
 #ifdef CARENAV_TEST_WITH_ROS
 #include <geometry_msgs/Twist.h>
+#include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 
 #include <mutex>
@@ -246,6 +247,63 @@ TEST(CliRosNodes, WalkerFollowsTheIntentTopic) {
   EXPECT_LT(std::stod(mx[1]), 1.5 + 0.2 * (push_s + 0.5) + 0.1)
       << "it stands once the user lets go; pushed " << push_s << " s: " << truth;
   EXPECT_NEAR(std::stod(my[1]), 1.5, 0.1) << truth;
+#endif
+}
+
+TEST(CliRosNodes, WalkerRefusesTheStairs) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  RosMaster master(scratch());
+  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
+  int argc = 1;
+  char name[] = "test";
+  char* argv[] = {name, nullptr};
+  ::ros::init(argc, argv, "carenav_test_user", ::ros::init_options::NoSigintHandler);
+  ::ros::NodeHandle nh;
+  auto intent = nh.advertise<geometry_msgs::Twist>("intent", 5);
+  // The farthest east the true walker got (the sim's ground_truth topic).
+  std::mutex mu;
+  double max_x = -1e9;
+  auto truth_sub = nh.subscribe<nav_msgs::Odometry>(
+      "ground_truth", 100, [&](const nav_msgs::Odometry::ConstPtr& m) {
+        std::lock_guard<std::mutex> l(mu);
+        max_x = std::max(max_x, m->pose.pose.position.x);
+      });
+  ::ros::AsyncSpinner spinner(1);
+  spinner.start();
+  // ISR-AIWALKER (Kinect as `points`, Leddar as `scan_leddar`) pushed at a
+  // staircase going down that starts at x = 6 m (walker-stairs-down.yaml).
+  const std::string walker = kSrc + "/ini/isr-aiwalker.ini";
+  const pid_t sim = spawn({kBin, "-q", "ros", "sim", "--profile", walker, "--scenario",
+                           kSrc + "/maps/scenarios/walker-stairs-down.yaml", "--summary",
+                           (master.dir() / "sim.json").string()},
+                          master.dir() / "sim.log");
+  const auto out = master.dir() / "nav";
+  const pid_t nav = spawn({kBin, "-q", "ros", "navigate", "--profile", walker, "--duration", "120",
+                           "--out", out.string()},
+                          master.dir() / "nav.log");
+  while (intent.getNumSubscribers() == 0 && ::kill(nav, 0) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  geometry_msgs::Twist push;
+  push.linear.x = 0.3;
+  for (int i = 0; i < 200; ++i) {  // 20 s at 0.3 m/s would be 6 m: far past the edge
+    intent.publish(push);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ::kill(sim, SIGINT);
+  EXPECT_EQ(waitExit(sim), 0) << slurp(master.dir() / "sim.log");
+  ::kill(nav, SIGINT);
+  waitExit(nav);
+  spinner.stop();
+  ::ros::shutdown();
+  const std::string truth = slurp(master.dir() / "sim.json");
+  EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
+  std::lock_guard<std::mutex> l(mu);
+  EXPECT_GT(max_x, 4.0) << "the walker walked towards the stairs: " << truth;
+  EXPECT_LT(max_x, 6.0) << "its centre never reached the stairs (x >= 6 m): " << truth;
+  std::cout << "farthest east: x = " << max_x << " m (the stairs begin at 6 m)\n";
+  const std::string summary = slurp(out / "summary.json");
+  EXPECT_GT(jsonNumber(summary, "depth_frames"), 10u) << summary;
 #endif
 }
 

@@ -6,6 +6,7 @@
 #include <carenav/io/map_io.h>
 #include <carenav/places/places.h>
 #include <carenav/ros/nodes.h>
+#include <carenav/runtime/bridge.h>
 #include <carenav/runtime/session.h>
 #include <carenav/sim/world.h>
 
@@ -14,15 +15,19 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/Twist.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <std_msgs/String.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace carenav::ros {
 
@@ -51,7 +56,8 @@ class NavigateNode {
   NavigateNode(const NavigateNodeOptions& o, NavigationSession& s) : o_(o), s_(s), pnh_("~") {
     for (const auto& sp : s.setup().sensors)
       if (sp.type == "lidar2d" && !lidar_) lidar_ = sp;
-    scan_ = nh_.subscribe("scan", 5, &NavigateNode::onScan, this);
+    if (lidar_) scan_ = nh_.subscribe("scan", 5, &NavigateNode::onScan, this);
+    subscribeOthers();
     odom_ = nh_.subscribe("odom", 20, &NavigateNode::onOdom, this);
     goal_ = nh_.subscribe("move_base_simple/goal", 2, &NavigateNode::onGoal, this);
     if (s.walker()) intent_ = nh_.subscribe("intent", 5, &NavigateNode::onIntent, this);
@@ -75,6 +81,9 @@ class NavigateNode {
     return stamp.isZero() ? elapsed() : stamp.toSec() - t0_;
   }
   void onScan(const sensor_msgs::LaserScan& m);
+  void subscribeOthers();
+  void onOtherScan(const SensorParams& sp, const sensor_msgs::LaserScan& m);
+  void onPoints(const SensorParams& sp, const sensor_msgs::PointCloud2& m);
   void onOdom(const nav_msgs::Odometry& m);
   void onGoal(const geometry_msgs::PoseStamped& m);
   /** A localiser's pose (amcl_pose): the navigator's map pose from now on
@@ -96,6 +105,7 @@ class NavigateNode {
   NavigationSession& s_;
   ::ros::NodeHandle nh_, pnh_;
   ::ros::Subscriber scan_, odom_, goal_, intent_, amcl_;
+  std::vector<::ros::Subscriber> others_;  // scan_LABEL, points[_LABEL]
   ::ros::Publisher cmd_, path_, status_, pose_, tf_;
   std::optional<SensorParams> lidar_;
   const ::ros::WallTime wall0_ = ::ros::WallTime::now();
@@ -114,6 +124,65 @@ void NavigateNode::onScan(const sensor_msgs::LaserScan& m) {
                                   mrpt::DEG2RAD(l.roll));
   s_.observation(scanFromRos(m, l.label, pose), odom_pose_, t(m.header.stamp));
   scan_arrived_ = true;
+}
+
+// Other lidars and range arrays on scan_LABEL (as the bridge's scan lines),
+// the first depth camera on `points`, others on points_LABEL.
+void NavigateNode::subscribeOthers() {
+  bool points = false;
+  for (const auto& sp : s_.setup().sensors) {
+    if ((sp.type == "lidar2d" && (!lidar_ || sp.label != lidar_->label)) ||
+        sp.type == "range-array") {
+      others_.push_back(nh_.subscribe<sensor_msgs::LaserScan>(
+          "scan_" + sp.label, 5,
+          [this, sp](const sensor_msgs::LaserScan::ConstPtr& m) { onOtherScan(sp, *m); }));
+    } else if (sp.type == "depth-camera") {
+      others_.push_back(nh_.subscribe<sensor_msgs::PointCloud2>(
+          points ? "points_" + sp.label : "points", 2,
+          [this, sp](const sensor_msgs::PointCloud2::ConstPtr& m) { onPoints(sp, *m); }));
+      points = true;
+    }
+  }
+}
+
+void NavigateNode::onOtherScan(const SensorParams& sp, const sensor_msgs::LaserScan& m) {
+  if (!have_odom_) return;
+  navigation::BridgeMessage b;
+  b.kind = navigation::BridgeMessage::Kind::Scan;
+  b.t = t(m.header.stamp);
+  b.label = sp.label;
+  b.ranges = m.ranges;
+  if (m.angle_increment < 0) std::reverse(b.ranges.begin(), b.ranges.end());
+  s_.observation(navigation::bridgeObservation(b, sp), odom_pose_, b.t);
+}
+
+// A cloud in the sensor's frame (x forward, y left, z up: the profile's
+// pose places it) as a depth observation for perception.
+void NavigateNode::onPoints(const SensorParams& sp, const sensor_msgs::PointCloud2& m) {
+  if (!have_odom_) return;
+  int off[3] = {-1, -1, -1};
+  for (const auto& f : m.fields)
+    for (int i = 0; i < 3; ++i)
+      if (f.name == std::string(1, "xyz"[i]) && f.datatype == sensor_msgs::PointField::FLOAT32)
+        off[i] = static_cast<int>(f.offset);
+  if (off[0] < 0 || off[1] < 0 || off[2] < 0 || m.point_step < 12) return;
+  auto o = mrpt::obs::CObservation3DRangeScan::Create();
+  o->sensorLabel = sp.label;
+  o->timestamp = fromRosTime(m.header.stamp);
+  o->sensorPose = mrpt::poses::CPose3D(sp.x, sp.y, sp.z, mrpt::DEG2RAD(sp.yaw),
+                                       mrpt::DEG2RAD(sp.pitch), mrpt::DEG2RAD(sp.roll));
+  o->hasPoints3D = true;
+  const size_t n = size_t{m.width} * m.height;
+  if (m.data.size() < n * m.point_step) return;
+  for (size_t i = 0; i < n; ++i) {
+    float v[3];
+    for (int k = 0; k < 3; ++k) std::memcpy(&v[k], &m.data[i * m.point_step + off[k]], 4);
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) continue;
+    o->points3D_x.push_back(v[0]);
+    o->points3D_y.push_back(v[1]);
+    o->points3D_z.push_back(v[2]);
+  }
+  s_.observation(o, odom_pose_, t(m.header.stamp));
 }
 
 void NavigateNode::onOdom(const nav_msgs::Odometry& m) {

@@ -8,14 +8,21 @@
 
 #include "msg_convert.h"
 
+#include <carenav/perception/cloud.h>
 #include <geometry_msgs/Twist.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
+#include <mrpt/obs/CObservationRange.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <rosbag/bag.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
+
+#include <cstring>
+#include <limits>
 
 #include <fstream>
 #include <iostream>
@@ -41,16 +48,73 @@ SimWorld simWorld(const SimNodeOptions& o) {
   return {o.world, o.start ? *o.start : navigation::TPose2D{}};
 }
 
+/** A range array's segments as a LaserScan over its fov (right to left),
+ *  one beam per segment; no return (at the maximum) as +inf. */
+sensor_msgs::LaserScan rangeArrayToRos(const mrpt::obs::CObservationRange& ra, double fov) {
+  sensor_msgs::LaserScan m;
+  m.header.frame_id = ra.sensorLabel;
+  const size_t n = ra.sensedData.size();
+  const double seg = n ? fov / n : 0;
+  m.angle_min = static_cast<float>(-fov / 2 + seg / 2);
+  m.angle_max = static_cast<float>(fov / 2 - seg / 2);
+  m.angle_increment = static_cast<float>(seg);
+  m.range_min = ra.minSensorDistance;
+  m.range_max = ra.maxSensorDistance;
+  for (const auto& me : ra.sensedData)
+    m.ranges.push_back(me.sensedDistance < ra.maxSensorDistance
+                           ? me.sensedDistance
+                           : std::numeric_limits<float>::infinity());
+  return m;
+}
+
+/** Points in the sensor frame (x forward, y left, z up) as an organised
+ *  PointCloud2 of float x, y, z (invalid points NaN). */
+sensor_msgs::PointCloud2 cloudToRos(const perception::Cloud& c, const std::string& frame,
+                                    const ::ros::Time& now) {
+  sensor_msgs::PointCloud2 m;
+  m.header.stamp = now;
+  m.header.frame_id = frame;
+  m.height = c.height > 0 ? static_cast<uint32_t>(c.height) : 1;
+  m.width = static_cast<uint32_t>(c.points.size() / m.height);
+  const char* names[3] = {"x", "y", "z"};
+  for (uint32_t i = 0; i < 3; ++i) {
+    sensor_msgs::PointField f;
+    f.name = names[i];
+    f.offset = 4 * i;
+    f.datatype = sensor_msgs::PointField::FLOAT32;
+    f.count = 1;
+    m.fields.push_back(f);
+  }
+  m.point_step = 12;
+  m.row_step = 12 * m.width;
+  m.is_dense = false;
+  m.data.resize(size_t{m.row_step} * m.height);
+  for (size_t i = 0; i < size_t{m.width} * m.height; ++i)
+    std::memcpy(&m.data[12 * i], &c.points[i], 12);
+  return m;
+}
+
 class SimNode {
  public:
   SimNode(const SimNodeOptions& o, sim::Simulator& sim) : o_(o), sim_(sim) {
-    for (const auto& s : sim.sensors())
-      if (s.type == "lidar2d") {
-        lidars_[s.label] =
-            nh_.advertise<sensor_msgs::LaserScan>(lidars_.empty() ? "scan" : "scan_" + s.label, 10);
-        poses_[s.label] = CPose3D(s.x, s.y, s.z, mrpt::DEG2RAD(s.yaw), mrpt::DEG2RAD(s.pitch),
-                                  mrpt::DEG2RAD(s.roll));
+    // The first lidar2d on `scan`, other lidars and range arrays on
+    // `scan_LABEL`; the first depth camera on `points`, others `points_LABEL`.
+    bool scan = false, points = false;
+    for (const auto& s : sim.sensors()) {
+      poses_[s.label] = CPose3D(s.x, s.y, s.z, mrpt::DEG2RAD(s.yaw), mrpt::DEG2RAD(s.pitch),
+                                mrpt::DEG2RAD(s.roll));
+      if (s.type == "lidar2d" || s.type == "range-array") {
+        const bool first = s.type == "lidar2d" && !scan;
+        scan = scan || first;
+        pubs_[s.label] =
+            nh_.advertise<sensor_msgs::LaserScan>(first ? "scan" : "scan_" + s.label, 10);
+      } else if (s.type == "depth-camera") {
+        pubs_[s.label] =
+            nh_.advertise<sensor_msgs::PointCloud2>(points ? "points_" + s.label : "points", 2);
+        points = true;
       }
+      fov_[s.label] = mrpt::DEG2RAD(s.fov);
+    }
     odom_ = nh_.advertise<nav_msgs::Odometry>("odom", 20);
     truth_ = nh_.advertise<nav_msgs::Odometry>("ground_truth", 20);
     tf_ = nh_.advertise<tf2_msgs::TFMessage>("tf", 50);
@@ -85,8 +149,9 @@ class SimNode {
   const SimNodeOptions& o_;
   sim::Simulator& sim_;
   ::ros::NodeHandle nh_;
-  std::map<std::string, ::ros::Publisher> lidars_;
+  std::map<std::string, ::ros::Publisher> pubs_;  // by sensor label
   std::map<std::string, CPose3D> poses_;
+  std::map<std::string, double> fov_;
   ::ros::Publisher odom_, truth_, tf_, clock_;
   ::ros::Subscriber cmd_;
   ::ros::WallTime last_cmd_;
@@ -124,13 +189,23 @@ void SimNode::publish(const sim::SimFrame& f, const ::ros::Time& now) {
   tf.transforms.push_back(link(o_.odom_frame, o_.base_frame,
                                CPose3D(f.odometry.x, f.odometry.y, 0, f.odometry.yaw, 0, 0), now));
   for (const auto& obs : f.observations) {
-    auto scan = std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs);
-    if (!scan || !lidars_.count(scan->sensorLabel)) continue;
-    // The scan in its own frame: the sensor pose goes to tf.
-    auto m = scanToRos(*scan, scan->sensorLabel);
-    m.header.stamp = now;
-    send(lidars_[scan->sensorLabel], m, now);
-    tf.transforms.push_back(link(o_.base_frame, scan->sensorLabel, poses_[scan->sensorLabel], now));
+    const auto pub = pubs_.find(obs->sensorLabel);
+    if (pub == pubs_.end()) continue;
+    // Each in its own frame (the sensor label): the sensor pose goes to tf.
+    if (auto scan = std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs)) {
+      auto m = scanToRos(*scan, scan->sensorLabel);
+      m.header.stamp = now;
+      send(pub->second, m, now);
+    } else if (auto ra = std::dynamic_pointer_cast<mrpt::obs::CObservationRange>(obs)) {
+      auto m = rangeArrayToRos(*ra, fov_[ra->sensorLabel]);
+      m.header.stamp = now;
+      send(pub->second, m, now);
+    } else if (auto cloud = perception::cloudFromObservation(*obs, CPose3D())) {
+      send(pub->second, cloudToRos(*cloud, obs->sensorLabel, now), now);
+    } else {
+      continue;
+    }
+    tf.transforms.push_back(link(o_.base_frame, obs->sensorLabel, poses_[obs->sensorLabel], now));
   }
   send(tf_, tf, now);
 }
@@ -180,11 +255,12 @@ void runSimNode(const SimNodeOptions& o) {
   }
   auto simp = setup.profile.section<sim::SimParams>("sim");
   auto world = std::make_shared<const sim::World>(sim::loadWorld(w.world, simp.wall_height));
-  std::vector<SensorParams> lidars;
+  std::vector<SensorParams> used;
   for (const auto& s : setup.sensors)
-    if (s.type == "lidar2d") lidars.push_back(s);
-  if (lidars.empty()) throw InputError(o.profile + ": no lidar2d sensor to publish");
-  sim::Simulator sim(world, setup.robot, lidars, simp);
+    if (s.type == "lidar2d" || s.type == "range-array" || s.type == "depth-camera")
+      used.push_back(s);
+  if (used.empty()) throw InputError(o.profile + ": no lidar2d, range-array or depth-camera");
+  sim::Simulator sim(world, setup.robot, used, simp);
   sim.reset({w.start.x, w.start.y, w.start.phi});
   if (sim.footprintBlocked({w.start.x, w.start.y, w.start.phi}, 0))
     throw InputError(w.world + ": the start pose puts the robot on an obstacle of the world");
