@@ -62,12 +62,13 @@ double percentile(std::vector<double> v, double p) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   const size_t n = argc > 1 ? std::stoul(argv[1]) : 1000, warm = 50;
   const auto dir = std::filesystem::temp_directory_path() / "carenav_bench_ros";
   std::filesystem::create_directories(dir);
-  carenav_ros_test::RosMaster master(dir);
+  carenav_ros_test::RosMaster master(dir);  // stopped on every way out of run()
   if (!master.up()) return std::cerr << "no rosmaster\n", 1;
+  const sensor_msgs::LaserScan rendered = renderScan();
   const pid_t nav = carenav_ros_test::spawn(
       {CARENAV_BIN, "-q", "ros", "navigate", "--profile", kProfile, "--plugin", "user-intent-dwa",
        "--world", kWorld, "--start", "1.5,1.5,0", "--on-scan", "--duration", "600"},
@@ -94,7 +95,7 @@ int main(int argc, char** argv) {
   while (scan_pub.getNumSubscribers() == 0 || odom_pub.getNumSubscribers() == 0 ||
          intent_pub.getNumSubscribers() == 0 || sub.getNumPublishers() == 0)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  sensor_msgs::LaserScan scan = renderScan();
+  sensor_msgs::LaserScan scan = rendered;
   nav_msgs::Odometry odom;
   odom.header.frame_id = "odom";
   odom.pose.pose.orientation.w = 1;
@@ -127,4 +128,13 @@ int main(int argc, char** argv) {
   std::printf("scan -> cmd_vel over %zu cycles: median %.2f ms, p99 %.2f ms, max %.2f ms\n",
               ms.size(), percentile(ms, 0.5), percentile(ms, 0.99), percentile(ms, 1.0));
   return 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "bench_ros_latency: " << e.what() << "\n";
+    return 1;
+  }
 }

@@ -66,6 +66,10 @@ inline pid_t spawn(std::vector<std::string> args, const fs::path& log) {
   return pid;
 }
 
+/** The child has not ended (an ended one is reaped here, never waited on
+ *  forever as a zombie that kill(pid, 0) still finds). */
+inline bool running(pid_t pid) { return ::waitpid(pid, nullptr, WNOHANG) == 0; }
+
 inline int waitExit(pid_t pid) {
   int st = 0;
   ::waitpid(pid, &st, 0);

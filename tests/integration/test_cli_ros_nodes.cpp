@@ -28,11 +28,45 @@ bool haveRosmaster() { return std::system("command -v rosmaster >/dev/null 2>&1"
 const std::string kApartment = kSrc + "/maps/worlds/apartment.yaml";
 const std::string kInterbot = kSrc + "/ini/interbot.ini";
 
-pid_t startSim(const RosMaster& m, const std::string& start) {
-  return spawn(
-      {kBin, "-q", "ros", "sim", "--profile", kInterbot, "--world", kApartment, "--start", start,
-       "--summary", (m.dir() / "sim.json").string(), "--record", (m.dir() / "sim.bag").string()},
-      m.dir() / "sim.log");
+/** One rosmaster for every test of this program (roscpp initialises once
+ *  per process, so this program's own node talks to one master), and a
+ *  folder per test for its logs and outputs. */
+RosMaster& sharedMaster() {
+  static RosMaster m(scratch());
+  return m;
+}
+
+fs::path testDir() {
+  const auto d =
+      sharedMaster().dir() / ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  fs::create_directories(d);
+  return d;
+}
+
+/** A node name of the test's own: private parameters stay on the shared
+ *  master under the node's name after it ends. */
+std::string nodeName(const char* node) {
+  return std::string("__name:=") + node + "_" +
+         ::testing::UnitTest::GetInstance()->current_test_info()->name();
+}
+
+/** This program's own ROS node (once; never shut down before exit). */
+void initTestNode() {
+  static const bool done = [] {
+    int argc = 1;
+    char name[] = "test";
+    char* argv[] = {name, nullptr};
+    ::ros::init(argc, argv, "carenav_test", ::ros::init_options::NoSigintHandler);
+    return true;
+  }();
+  (void)done;
+}
+
+pid_t startSim(const fs::path& dir, const std::string& start) {
+  return spawn({kBin, "-q", "ros", "sim", "--profile", kInterbot, "--world", kApartment, "--start",
+                start, "--duration", "150", "--summary", (dir / "sim.json").string(), "--record",
+                (dir / "sim.bag").string()},
+               dir / "sim.log");
 }
 
 #define SKIP_WITHOUT_ROS() \
@@ -44,22 +78,23 @@ pid_t startSim(const RosMaster& m, const std::string& start) {
 TEST(CliRosNodes, SimAndNavigateReachTheGoalWithoutCollision) {
   SKIP_WITHOUT_ROS();
 #ifdef CARENAV_TEST_WITH_ROS
-  RosMaster master(scratch());
-  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
-  const pid_t sim = startSim(master, "1.5,1.5,0");
-  const auto out = master.dir() / "nav";
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  const pid_t sim = startSim(dir, "1.5,1.5,0");
+  const auto out = dir / "nav";
   // --duration bounds the run (the node's own clock), not the test.
-  const pid_t nav = spawn({kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--world",
-                           kApartment, "--start", "1.5,1.5,0", "--goal", "3.5,3.8,90", "--duration",
-                           "120", "--out", out.string(), "_robot/v_max:=0.2"},
-                          master.dir() / "nav.log");
+  const pid_t nav =
+      spawn({kBin, "-q", "ros", "navigate", nodeName("navigate"), "--profile", kInterbot, "--world",
+             kApartment, "--start", "1.5,1.5,0", "--goal", "3.5,3.8,90", "--duration", "120",
+             "--out", out.string(), "_robot/v_max:=0.2"},
+            dir / "nav.log");
   const int nav_code = waitExit(nav);
   ::kill(sim, SIGINT);
-  EXPECT_EQ(waitExit(sim), 0) << slurp(master.dir() / "sim.log");
-  EXPECT_EQ(nav_code, 0) << slurp(master.dir() / "nav.log");
+  EXPECT_EQ(waitExit(sim), 0) << slurp(dir / "sim.log");
+  EXPECT_EQ(nav_code, 0) << slurp(dir / "nav.log");
   const std::string summary = slurp(out / "summary.json");
   EXPECT_NE(summary.find("\"outcome\": \"goal reached\""), std::string::npos) << summary;
-  const std::string truth = slurp(master.dir() / "sim.json");
+  const std::string truth = slurp(dir / "sim.json");
   EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
   std::smatch mx, my;
   ASSERT_TRUE(std::regex_search(truth, mx, std::regex("\"x\": ([-0-9.e]+)"))) << truth;
@@ -80,11 +115,11 @@ TEST(CliRosNodes, SimAndNavigateReachTheGoalWithoutCollision) {
   EXPECT_GT(vmax, 0.15);
   EXPECT_LE(vmax, 0.2 + 1e-9) << "~robot/v_max 0.2 is applied";
   // The run recorded by the sim maps as a bag: its scans, odometry and tf.
-  const auto bag = master.dir() / "sim.bag";
+  const auto bag = dir / "sim.bag";
   const auto slam = carenav_test::carenav({"-q", "slam", "--profile", kInterbot, "--rawlog",
-                                           bag.string(), "--out", (master.dir() / "map").string()});
+                                           bag.string(), "--out", (dir / "map").string()});
   EXPECT_EQ(slam.code, 0) << slam.err;
-  const std::string map_summary = slurp(master.dir() / "map" / "summary.json");
+  const std::string map_summary = slurp(dir / "map" / "summary.json");
   EXPECT_GT(jsonNumber(map_summary, "steps"), 50u) << map_summary;
 #endif
 }
@@ -92,8 +127,8 @@ TEST(CliRosNodes, SimAndNavigateReachTheGoalWithoutCollision) {
 TEST(CliRosNodes, KillingTheSimStopsTheRobot) {
   SKIP_WITHOUT_ROS();
 #ifdef CARENAV_TEST_WITH_ROS
-  RosMaster master(scratch());
-  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
   // This test's own subscriber: every cmd_vel with its arrival time.
   struct Cmd {
     std::chrono::steady_clock::time_point t;
@@ -101,10 +136,7 @@ TEST(CliRosNodes, KillingTheSimStopsTheRobot) {
   };
   std::mutex mu;
   std::vector<Cmd> cmds;
-  int argc = 1;
-  char name[] = "test";
-  char* argv[] = {name, nullptr};
-  ::ros::init(argc, argv, "carenav_test_listener", ::ros::init_options::NoSigintHandler);
+  initTestNode();
   ::ros::NodeHandle nh;
   auto sub = nh.subscribe<geometry_msgs::Twist>(
       "cmd_vel", 100, [&](const geometry_msgs::Twist::ConstPtr& m) {
@@ -113,19 +145,18 @@ TEST(CliRosNodes, KillingTheSimStopsTheRobot) {
       });
   ::ros::AsyncSpinner spinner(1);
   spinner.start();
-  const pid_t sim = startSim(master, "1.0,1.5,0");
+  const pid_t sim = startSim(dir, "1.0,1.5,0");
   const pid_t nav =
-      spawn({kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--world", kApartment,
-             "--start", "1.0,1.5,0", "--goal", "4.2,1.5,0", "--duration", "60"},
-            master.dir() / "nav.log");
+      spawn({kBin, "-q", "ros", "navigate", nodeName("navigate"), "--profile", kInterbot, "--world",
+             kApartment, "--start", "1.0,1.5,0", "--goal", "4.2,1.5,0", "--duration", "60"},
+            dir / "nav.log");
   // Until the robot drives (a command above 5 cm/s), then the sim is killed.
   auto moving = [&] {
     std::lock_guard<std::mutex> l(mu);
     return !cmds.empty() && cmds.back().v > 0.05;
   };
-  while (!moving() && ::kill(nav, 0) == 0)
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  ASSERT_TRUE(moving()) << slurp(master.dir() / "nav.log");
+  while (!moving() && running(nav)) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_TRUE(moving()) << slurp(dir / "nav.log");
   ::kill(sim, SIGKILL);
   const auto killed = std::chrono::steady_clock::now();
   waitExit(sim);
@@ -133,7 +164,7 @@ TEST(CliRosNodes, KillingTheSimStopsTheRobot) {
   ::kill(nav, SIGINT);
   waitExit(nav);
   spinner.stop();
-  ::ros::shutdown();
+  sub.shutdown();  // (the callbacks use this test's locals)
   // sensor_timeout 0.5 s + one control period 0.1 s (+ delivery): from then on zero.
   const auto bound = killed + std::chrono::milliseconds(750);
   std::lock_guard<std::mutex> l(mu);
@@ -158,42 +189,44 @@ TEST(CliRosNodes, KillingTheSimStopsTheRobot) {
 TEST(CliRosNodes, PrivateParametersAreProfileKeys) {
   SKIP_WITHOUT_ROS();
 #ifdef CARENAV_TEST_WITH_ROS
-  RosMaster master(scratch());
-  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
   // ~navigation/no_such_key is [navigation] no_such_key: refused as the
   // profile refuses it (exit 2). (A parameter taken: the test above.)
-  const pid_t bad = spawn({kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--world",
-                           kApartment, "--start", "1.5,1.5,0", "_navigation/no_such_key:=1"},
-                          master.dir() / "bad.log");
-  EXPECT_EQ(waitExit(bad), 2) << slurp(master.dir() / "bad.log");
-  EXPECT_NE(slurp(master.dir() / "bad.log").find("no_such_key"), std::string::npos)
-      << slurp(master.dir() / "bad.log");
+  const pid_t bad =
+      spawn({kBin, "-q", "ros", "navigate", nodeName("navigate"), "--profile", kInterbot, "--world",
+             kApartment, "--start", "1.5,1.5,0", "_navigation/no_such_key:=1"},
+            dir / "bad.log");
+  EXPECT_EQ(waitExit(bad), 2) << slurp(dir / "bad.log");
+  EXPECT_NE(slurp(dir / "bad.log").find("no_such_key"), std::string::npos)
+      << slurp(dir / "bad.log");
 #endif
 }
 
 TEST(CliRosNodes, SimLocalizeNavigateReachTheGoal) {
   SKIP_WITHOUT_ROS();
 #ifdef CARENAV_TEST_WITH_ROS
-  RosMaster master(scratch());
-  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
-  const pid_t sim = startSim(master, "1.5,1.5,0");
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  const pid_t sim = startSim(dir, "1.5,1.5,0");
   const pid_t loc = spawn({kBin, "-q", "ros", "localize", "--profile", kInterbot, "--world",
                            kApartment, "--start", "1.5,1.5,0"},
-                          master.dir() / "loc.log");
+                          dir / "loc.log");
   // navigate is told a start 1 m off: only the localiser's amcl_pose takes
   // the robot to the goal in truth.
-  const auto out = master.dir() / "nav";
-  const pid_t nav = spawn({kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--world",
-                           kApartment, "--start", "1.5,2.5,0", "--goal", "3.5,3.8,90",
-                           "--external-pose", "--duration", "120", "--out", out.string()},
-                          master.dir() / "nav.log");
+  const auto out = dir / "nav";
+  const pid_t nav =
+      spawn({kBin, "-q", "ros", "navigate", nodeName("navigate"), "--profile", kInterbot, "--world",
+             kApartment, "--start", "1.5,2.5,0", "--goal", "3.5,3.8,90", "--external-pose",
+             "--duration", "120", "--out", out.string()},
+            dir / "nav.log");
   const int nav_code = waitExit(nav);
   ::kill(sim, SIGINT);
   ::kill(loc, SIGINT);
-  EXPECT_EQ(waitExit(sim), 0) << slurp(master.dir() / "sim.log");
-  EXPECT_EQ(waitExit(loc), 0) << slurp(master.dir() / "loc.log");
-  EXPECT_EQ(nav_code, 0) << slurp(master.dir() / "nav.log");
-  const std::string truth = slurp(master.dir() / "sim.json");
+  EXPECT_EQ(waitExit(sim), 0) << slurp(dir / "sim.log");
+  EXPECT_EQ(waitExit(loc), 0) << slurp(dir / "loc.log");
+  EXPECT_EQ(nav_code, 0) << slurp(dir / "nav.log");
+  const std::string truth = slurp(dir / "sim.json");
   EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
   std::smatch mx, my;
   ASSERT_TRUE(std::regex_search(truth, mx, std::regex("\"x\": ([-0-9.e]+)"))) << truth;
@@ -206,20 +239,17 @@ TEST(CliRosNodes, SimLocalizeNavigateReachTheGoal) {
 TEST(CliRosNodes, WalkerFollowsTheIntentTopic) {
   SKIP_WITHOUT_ROS();
 #ifdef CARENAV_TEST_WITH_ROS
-  RosMaster master(scratch());
-  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
-  int argc = 1;
-  char name[] = "test";
-  char* argv[] = {name, nullptr};
-  ::ros::init(argc, argv, "carenav_test_user", ::ros::init_options::NoSigintHandler);
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  initTestNode();
   ::ros::NodeHandle nh;
   auto intent = nh.advertise<geometry_msgs::Twist>("intent", 5);
-  const pid_t sim = startSim(master, "1.5,1.5,0");
+  const pid_t sim = startSim(dir, "1.5,1.5,0");
   // Interbot driven as a walker (user-intent-dwa): the user's Twist on `intent`.
-  const pid_t nav = spawn({kBin, "-q", "ros", "navigate", "--profile", kInterbot, "--plugin",
-                           "user-intent-dwa", "--duration", "60"},
-                          master.dir() / "nav.log");
-  while (intent.getNumSubscribers() == 0 && ::kill(nav, 0) == 0)
+  const pid_t nav = spawn({kBin, "-q", "ros", "navigate", nodeName("navigate"), "--profile",
+                           kInterbot, "--plugin", "user-intent-dwa", "--duration", "60"},
+                          dir / "nav.log");
+  while (intent.getNumSubscribers() == 0 && running(nav))
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   geometry_msgs::Twist push;
   push.linear.x = 0.2;
@@ -232,11 +262,10 @@ TEST(CliRosNodes, WalkerFollowsTheIntentTopic) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - push0).count();
   std::this_thread::sleep_for(std::chrono::seconds(2));
   ::kill(sim, SIGINT);
-  EXPECT_EQ(waitExit(sim), 0) << slurp(master.dir() / "sim.log");
+  EXPECT_EQ(waitExit(sim), 0) << slurp(dir / "sim.log");
   ::kill(nav, SIGINT);
   waitExit(nav);
-  ::ros::shutdown();
-  const std::string truth = slurp(master.dir() / "sim.json");
+  const std::string truth = slurp(dir / "sim.json");
   EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
   std::smatch mx, my;
   ASSERT_TRUE(std::regex_search(truth, mx, std::regex("\"x\": ([-0-9.e]+)"))) << truth;
@@ -253,12 +282,9 @@ TEST(CliRosNodes, WalkerFollowsTheIntentTopic) {
 TEST(CliRosNodes, WalkerRefusesTheStairs) {
   SKIP_WITHOUT_ROS();
 #ifdef CARENAV_TEST_WITH_ROS
-  RosMaster master(scratch());
-  ASSERT_TRUE(master.up()) << slurp(master.dir() / "master.log");
-  int argc = 1;
-  char name[] = "test";
-  char* argv[] = {name, nullptr};
-  ::ros::init(argc, argv, "carenav_test_user", ::ros::init_options::NoSigintHandler);
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  initTestNode();
   ::ros::NodeHandle nh;
   auto intent = nh.advertise<geometry_msgs::Twist>("intent", 5);
   // The farthest east the true walker got (the sim's ground_truth topic).
@@ -275,14 +301,14 @@ TEST(CliRosNodes, WalkerRefusesTheStairs) {
   // staircase going down that starts at x = 6 m (walker-stairs-down.yaml).
   const std::string walker = kSrc + "/ini/isr-aiwalker.ini";
   const pid_t sim = spawn({kBin, "-q", "ros", "sim", "--profile", walker, "--scenario",
-                           kSrc + "/maps/scenarios/walker-stairs-down.yaml", "--summary",
-                           (master.dir() / "sim.json").string()},
-                          master.dir() / "sim.log");
-  const auto out = master.dir() / "nav";
-  const pid_t nav = spawn({kBin, "-q", "ros", "navigate", "--profile", walker, "--duration", "120",
-                           "--out", out.string()},
-                          master.dir() / "nav.log");
-  while (intent.getNumSubscribers() == 0 && ::kill(nav, 0) == 0)
+                           kSrc + "/maps/scenarios/walker-stairs-down.yaml", "--duration", "150",
+                           "--summary", (dir / "sim.json").string()},
+                          dir / "sim.log");
+  const auto out = dir / "nav";
+  const pid_t nav = spawn({kBin, "-q", "ros", "navigate", nodeName("navigate"), "--profile", walker,
+                           "--duration", "120", "--out", out.string()},
+                          dir / "nav.log");
+  while (intent.getNumSubscribers() == 0 && running(nav))
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   geometry_msgs::Twist push;
   push.linear.x = 0.3;
@@ -291,12 +317,12 @@ TEST(CliRosNodes, WalkerRefusesTheStairs) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   ::kill(sim, SIGINT);
-  EXPECT_EQ(waitExit(sim), 0) << slurp(master.dir() / "sim.log");
+  EXPECT_EQ(waitExit(sim), 0) << slurp(dir / "sim.log");
   ::kill(nav, SIGINT);
   waitExit(nav);
   spinner.stop();
-  ::ros::shutdown();
-  const std::string truth = slurp(master.dir() / "sim.json");
+  truth_sub.shutdown();  // (the callback uses this test's locals)
+  const std::string truth = slurp(dir / "sim.json");
   EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
   std::lock_guard<std::mutex> l(mu);
   EXPECT_GT(max_x, 4.0) << "the walker walked towards the stairs: " << truth;
