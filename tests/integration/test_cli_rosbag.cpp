@@ -110,4 +110,24 @@ TEST(CliRosbag, TruncatedBagIsExitTwoAndKeepsWhatWasRead) {
 #endif
 }
 
+TEST(CliRosbag, LocalizeOnTheBagTracksAsOnTheRawlog) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  // MRPT's localization_demo as a bag: `carenav localize --rawlog X.bag`
+  // gives the same track as on the rawlog (same scans, odometry, stamps).
+  const std::string rawlog = kDatasets + "/localization_demo.rawlog";
+  const std::string map = kDatasets + "/localization_demo.simplemap.gz";
+  const auto bag = scratch() / "loc_demo.bag";
+  carenav::ros::writeBagFromRawlog(rawlog, bag.string());
+  const auto a = scratch() / "loc_rawlog", b = scratch() / "loc_bag";
+  const std::string profile = kSrc + "/ini/defaults.ini";
+  for (const auto& [log, out] : {std::pair{rawlog, a}, std::pair{bag.string(), b}}) {
+    const auto r = carenav_test::carenav({"-q", "localize", "--profile", profile, "--map", map,
+                                          "--rawlog", log, "--global", "--out", out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  EXPECT_EQ(slurp(a / "track.tum"), slurp(b / "track.tum"));
+#endif
+}
+
 }  // namespace
