@@ -235,6 +235,14 @@ RawlogReader::RawlogReader(const std::string& path) : path_(path) {
   file_size_ = fs::file_size(path, ec);
   if (ec) throw InputError(path + ": cannot read the file size: " + ec.message());
   if (file_size_ == 0) throw InputError(path + ": empty file (0 bytes), not a rawlog");
+  if (const auto* format = rawlogFormatFor(path)) {
+    foreign_ = (*format)(path);
+    return;
+  }
+  if (path.size() > 4 && path.compare(path.size() - 4, 4, ".bag") == 0)
+    throw InputError(path +
+                     ": a ROS bag, but this carenav was built without its ROS part "
+                     "(CARENAV_WITH_ROS=OFF); convert it elsewhere or rebuild with ROS");
   {
     std::ifstream f(path, std::ios::binary);
     if (!f) throw InputError(path + ": cannot open the rawlog for reading");
@@ -247,10 +255,33 @@ RawlogReader::RawlogReader(const std::string& path) : path_(path) {
 
 RawlogReader::~RawlogReader() = default;
 
-uint64_t RawlogReader::filePosition() const { return stream_->filePosition(); }
-uint64_t RawlogReader::streamOffset() const { return stream_->count(); }
+uint64_t RawlogReader::filePosition() const {
+  return foreign_ ? foreign_->position() : stream_->filePosition();
+}
+uint64_t RawlogReader::streamOffset() const {
+  return foreign_ ? foreign_->position() : stream_->count();
+}
+
+// An entry of a registered format: one observation (observation-only form).
+bool RawlogReader::nextForeign(RawlogEntry& out) {
+  mrpt::obs::CObservation::Ptr obs;
+  if (!foreign_->next(obs)) {
+    if (entries_ == 0)
+      throw RawlogError(path_ + ": no observations carenav reads (no scans, no odometry)", 0, 0);
+    return false;
+  }
+  out = RawlogEntry{};
+  out.index = entries_;
+  out.kind = EntryKind::Observation;
+  out.observation = obs;
+  out.object = obs;
+  fillDerived(out);
+  ++entries_;
+  return true;
+}
 
 bool RawlogReader::next(RawlogEntry& out) {
+  if (foreign_) return nextForeign(out);
   const uint64_t start = stream_->count();
   auto broken = [&](const std::string& why) -> RawlogError {
     std::string what;

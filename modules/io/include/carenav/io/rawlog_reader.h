@@ -3,6 +3,7 @@
 #pragma once
 
 #include <carenav/common/errors.h>
+#include <carenav/io/rawlog_formats.h>
 
 #include <mrpt/core/Clock.h>
 #include <mrpt/obs/CActionCollection.h>
@@ -74,7 +75,9 @@ constexpr uint64_t kRawlogMaxAllocation = uint64_t{1} << 30;   ///< 1 GiB
 class RawlogReader {
  public:
   /** Opens the file. Throws InputError when it is missing, unreadable, a
-   *  directory or empty. */
+   *  directory or empty. A file whose extension has a registered format
+   *  (rawlog_formats.h, e.g. a ROS `.bag`) is read through it, as an
+   *  observation-only rawlog. */
   explicit RawlogReader(const std::string& path);
   ~RawlogReader();
   RawlogReader(const RawlogReader&) = delete;
@@ -97,11 +100,13 @@ class RawlogReader {
  private:
   class CountingStream;
   void fillDerived(RawlogEntry& e);
+  bool nextForeign(RawlogEntry& out);
 
   std::string path_;
   uint64_t file_size_ = 0;
   bool gzipped_ = false;
   std::unique_ptr<CountingStream> stream_;
+  std::unique_ptr<ObservationSource> foreign_;  ///< a registered format's reader
   size_t entries_ = 0;
   bool seen_motion_action_ = false;
   std::map<std::string, mrpt::poses::CPose2D> last_odometry_;  // per sensor label

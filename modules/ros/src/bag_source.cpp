@@ -1,0 +1,229 @@
+// A bag's scans and odometry as observations (bag.h), read front to back
+// with BagFile; sensor poses from tf.
+#include <carenav/common/errors.h>
+#include <carenav/io/rawlog_reader.h>
+#include <carenav/ros/bag.h>
+
+#include "bag_file.h"
+#include "msg_convert.h"
+
+#include <mrpt/obs/CObservationOdometry.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/serialization.h>
+#include <sensor_msgs/LaserScan.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <optional>
+
+namespace carenav::ros {
+
+namespace {
+
+using mrpt::obs::CObservation;
+using mrpt::poses::CPose3D;
+
+template <class M>
+bool isType(const BagConnection& c) {
+  return c.type == ::ros::message_traits::DataType<M>::value() &&
+         (c.md5sum == "*" || c.md5sum == ::ros::message_traits::MD5Sum<M>::value());
+}
+
+template <class M>
+M decode(const BagMessage& m) {
+  M msg;
+  ::ros::serialization::IStream s(const_cast<uint8_t*>(m.data), m.size);
+  ::ros::serialization::deserialize(s, msg);
+  return msg;
+}
+
+/** The robot's frames as tf gives them: child -> (parent, pose in parent). */
+class FrameTree {
+ public:
+  void set(const std::string& parent, const std::string& child, const CPose3D& p) {
+    links_[bareFrame(child)] = {bareFrame(parent), p};
+  }
+  /** `frame` in `base` (walking up at most 16 links); nullopt if not linked. */
+  std::optional<CPose3D> in(const std::string& frame, const std::string& base) const {
+    CPose3D acc;
+    std::string f = bareFrame(frame);
+    for (int i = 0; i < 16; ++i) {
+      if (f == base) return acc;
+      const auto it = links_.find(f);
+      if (it == links_.end()) return std::nullopt;
+      acc = it->second.second + acc;
+      f = it->second.first;
+    }
+    return std::nullopt;
+  }
+
+ private:
+  std::map<std::string, std::pair<std::string, CPose3D>> links_;
+};
+
+class BagSource : public io::ObservationSource {
+ public:
+  BagSource(const std::string& path, BagReadOptions o, std::shared_ptr<BagReadNotes> notes)
+      : path_(path),
+        o_(std::move(o)),
+        notes_(notes ? notes : std::make_shared<BagReadNotes>()),
+        bag_(open(path)) {
+    for (const auto& s : o_.scans) {
+      const size_t eq = s.find('=');
+      scan_labels_[s.substr(0, eq)] = eq == std::string::npos ? "" : s.substr(eq + 1);
+    }
+    o_.odom_frame = bareFrame(o_.odom_frame);
+    o_.base_frame = bareFrame(o_.base_frame);
+  }
+  bool next(CObservation::Ptr& out) override;
+  uint64_t position() const override { return bag_.position(); }
+
+ private:
+  static BagFile open(const std::string& path) {
+    try {
+      return BagFile(path);
+    } catch (const BagBroken& b) {
+      throw InputError(path + ": " + b.what);
+    }
+  }
+  CObservation::Ptr take(const BagMessage& m);
+  CObservation::Ptr scan(const BagMessage& m, const std::string& label);
+  CObservation::Ptr odometry(const BagMessage& m);
+  CObservation::Ptr transforms(const BagMessage& m);
+  bool odomTopic(const BagConnection& c);
+  bool scanTopic(const BagConnection& c, std::string& label) const;
+
+  std::string path_;
+  BagReadOptions o_;
+  std::shared_ptr<BagReadNotes> notes_;
+  BagFile bag_;
+  std::map<std::string, std::string> scan_labels_;  // topic -> label ("" default)
+  FrameTree frames_;
+  std::optional<std::string> odom_topic_;  // the Odometry topic read, once chosen
+};
+
+bool BagSource::next(CObservation::Ptr& out) {
+  BagMessage m;
+  for (;;) {
+    try {
+      if (!bag_.next(m)) return false;
+      ++notes_->messages;
+      notes_->topics[m.connection->topic] = m.connection->type;
+      out = take(m);
+    } catch (const BagBroken& b) {
+      const size_t n = bag_.messages();
+      throw io::RawlogError(path_ + ": bag broken at message " + std::to_string(n) + " (byte " +
+                                std::to_string(b.offset) + "): " + b.what + "; the " +
+                                std::to_string(n) + " messages before it were read",
+                            n, b.offset);
+    } catch (const ::ros::Exception& e) {  // a message shorter than its type
+      const size_t n = bag_.messages();
+      throw io::RawlogError(path_ + ": bag broken at message " + std::to_string(n) + " (byte " +
+                                std::to_string(m.offset) + "): a " + m.connection->type +
+                                " message on " + m.connection->topic + " that does not decode (" +
+                                e.what() + "); the " + std::to_string(n - 1) +
+                                " messages before it were read",
+                            n, m.offset);
+    }
+    if (out) return true;
+  }
+}
+
+CObservation::Ptr BagSource::take(const BagMessage& m) {
+  const BagConnection& c = *m.connection;
+  std::string label;
+  if (scanTopic(c, label)) return scan(m, label);
+  if (odomTopic(c)) return odometry(m);
+  if (isType<tf2_msgs::TFMessage>(c) && (c.topic == "/tf" || c.topic == "/tf_static"))
+    return transforms(m);
+  ++notes_->skipped;
+  return nullptr;
+}
+
+bool BagSource::scanTopic(const BagConnection& c, std::string& label) const {
+  if (!isType<sensor_msgs::LaserScan>(c)) return false;
+  if (scan_labels_.empty()) return true;
+  const auto it = scan_labels_.find(c.topic);
+  if (it == scan_labels_.end()) return false;
+  label = it->second;
+  return true;
+}
+
+bool BagSource::odomTopic(const BagConnection& c) {
+  if (!isType<nav_msgs::Odometry>(c) || o_.odom == "tf" || o_.odom == "none") return false;
+  if (!odom_topic_) {
+    if (!o_.odom.empty() && o_.odom != c.topic) return false;
+    odom_topic_ = c.topic;  // the given one, or the first met
+  }
+  return *odom_topic_ == c.topic;
+}
+
+CObservation::Ptr BagSource::scan(const BagMessage& m, const std::string& given) {
+  const auto msg = decode<sensor_msgs::LaserScan>(m);
+  const std::string frame = bareFrame(msg.header.frame_id);
+  const std::string label = !given.empty()   ? given
+                            : !frame.empty() ? frame
+                                             : bareFrame(m.connection->topic);
+  std::optional<CPose3D> pose = frames_.in(frame, o_.base_frame);
+  if (!pose) {
+    const auto it = o_.sensor_poses.find(label);
+    pose = it != o_.sensor_poses.end() ? it->second : CPose3D();
+    ++notes_->scans_no_tf;
+  }
+  auto o = scanFromRos(msg, label, *pose);
+  if (msg.header.stamp.isZero()) o->timestamp = fromRosTime(::ros::Time(m.sec, m.nsec));
+  ++notes_->scans;
+  return o;
+}
+
+CObservation::Ptr BagSource::odometry(const BagMessage& m) {
+  const auto msg = decode<nav_msgs::Odometry>(m);
+  auto o = mrpt::obs::CObservationOdometry::Create();
+  o->sensorLabel = "odometry";
+  o->timestamp =
+      fromRosTime(msg.header.stamp.isZero() ? ::ros::Time(m.sec, m.nsec) : msg.header.stamp);
+  const auto& p = msg.pose.pose;
+  o->odometry = mrpt::poses::CPose2D(p.position.x, p.position.y, yawOf(p.orientation));
+  o->hasVelocities = true;
+  o->velocityLocal = {msg.twist.twist.linear.x, msg.twist.twist.linear.y,
+                      msg.twist.twist.angular.z};
+  ++notes_->odometry;
+  return o;
+}
+
+// tf: frames of the robot's sensors, and odom -> base as odometry (when
+// odometry comes from tf: "tf", or "" while the bag has shown no Odometry).
+CObservation::Ptr BagSource::transforms(const BagMessage& m) {
+  const auto msg = decode<tf2_msgs::TFMessage>(m);
+  const bool tf_odom = o_.odom == "tf" || (o_.odom.empty() && !odom_topic_);
+  CObservation::Ptr out;
+  for (const auto& t : msg.transforms) {
+    const std::string parent = bareFrame(t.header.frame_id), child = bareFrame(t.child_frame_id);
+    if (parent == o_.odom_frame && child == o_.base_frame) {
+      if (!tf_odom || out) continue;
+      auto o = mrpt::obs::CObservationOdometry::Create();
+      o->sensorLabel = "odometry";
+      o->timestamp = fromRosTime(t.header.stamp);
+      const CPose3D p = poseOf(t.transform);
+      o->odometry = mrpt::poses::CPose2D(p.x(), p.y(), p.yaw());
+      ++notes_->odometry;
+      out = o;
+    } else {
+      frames_.set(parent, child, poseOf(t.transform));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::unique_ptr<io::ObservationSource> openBag(const std::string& path, BagReadOptions options,
+                                               std::shared_ptr<BagReadNotes> notes) {
+  return std::make_unique<BagSource>(path, std::move(options), std::move(notes));
+}
+
+void registerBagFormat() {
+  io::registerRawlogFormat(".bag", "ROS bag",
+                           [](const std::string& path) { return openBag(path, {}); });
+}
+
+}  // namespace carenav::ros
