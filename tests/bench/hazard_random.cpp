@@ -33,7 +33,7 @@
 //   hazard_random [--profile ini/isr-aiwalker.ini] [--scenes 550] [--seed 1]
 //                 [--decimation 1] [--margin 0.2] [--set section.key=value]...
 //                 [--calib-error 3] [--noise-max 3] [--roll 5] [--list-clear]
-//                 [--only TYPE]
+//                 [--only TYPE] [--dump N]
 #include <carenav/common/profile.h>
 #include <carenav/common/robot.h>
 #include <carenav/perception/pipeline.h>
@@ -278,10 +278,11 @@ void addTable(Scene& s, Gen& g, double ex) {
 }
 
 /** Separable from the floor at range r (from a camera h high) by the noise
- *  model: a height c above or below the floor against noise_k vertical
- *  sigmas, sigma_v = depth_noise_std r h (docs/perceive.md). */
-bool separable(double c, double r, double h, const PerceptionParams& pp) {
-  return std::abs(c) >= pp.noise_k * pp.depth_noise_std * r * h;
+ *  model with the scene's true noise (f times depth_noise_std): a height c
+ *  above or below the floor against noise_k vertical sigmas, sigma_v =
+ *  f depth_noise_std r h (docs/perceive.md "Range per hazard size"). */
+bool separable(double c, double r, const Mount& m, const PerceptionParams& pp) {
+  return std::abs(c) >= pp.noise_k * m.noise_factor * pp.depth_noise_std * r * m.h;
 }
 
 /** Fills the hazard of scene type t at edge distance ex. */
@@ -304,7 +305,7 @@ void buildHazard(Scene& s, Gen& g, const Mount& m, const PerceptionParams& pp) {
       s.angle = g.uni(-60, 60);
       s.size = g.uni(0.05, 0.20);
       addDrop(s, g, ex, s.angle * kDeg, 1, 10, s.size);
-      s.in_range = separable(s.size, r, m.h, pp);
+      s.in_range = separable(s.size, r, m, pp);
       break;
     case Type::Hole:
     case Type::Gutter: {
@@ -319,14 +320,14 @@ void buildHazard(Scene& s, Gen& g, const Mount& m, const PerceptionParams& pp) {
       addPit(s, cx, cy, th, s.size, l, s.depth);
       // The ray dips w tan(alpha) = w h / r_h into the pit (its far wall).
       const double seen = std::min(s.depth, s.size * m.h / std::max(0.1, ex - kCamX));
-      s.in_range = separable(seen, r, m.h, pp);
+      s.in_range = separable(seen, r, m, pp);
       break;
     }
     case Type::StepUp:
       s.angle = g.uni(-45, 45);
       s.size = g.uni(0.02, 0.10);
       addDrop(s, g, ex, s.angle * kDeg, 1, 10, -s.size);
-      s.in_range = separable(s.size, r, m.h, pp);
+      s.in_range = separable(s.size, r, m, pp);
       break;
     case Type::RampOk:
     case Type::RampSteep:
@@ -342,7 +343,7 @@ void buildHazard(Scene& s, Gen& g, const Mount& m, const PerceptionParams& pp) {
       alongEdge(ex, th, w / 2, cx, cy);
       s.prisms.push_back(ground(0, 0, 0, 12, 12, 0, 0, false));
       s.prisms.push_back({cx, cy, th, w / 2, 12, s.size, 0, -0.01, true, false});
-      s.in_range = separable(s.size, r, m.h, pp);
+      s.in_range = separable(s.size, r, m, pp);
       break;
     }
     case Type::Table:
@@ -438,6 +439,13 @@ namespace {
 
 // ------------------------------------------------------------------ scoring
 
+std::string pct(size_t num, size_t den) {
+  if (den == 0) return "-";
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f %%", 100.0 * num / den);
+  return b;
+}
+
 enum class Label : uint8_t { Outside, Floor, Hazard, Traversable, Margin };
 
 Label labelAt(const Scene& s, double x, double y) {
@@ -501,7 +509,8 @@ struct Corridor {
 };
 
 SceneScore scoreScene(const LocalOccupancy& g, const std::vector<Label>& lab,
-                      const std::vector<Point3f>& truth, const Corridor& cor, double occ_thr) {
+                      const std::vector<Point3f>& truth, const Corridor& cor, double into,
+                      double occ_thr) {
   const int m = g.cells();
   std::vector<char> seen(static_cast<size_t>(m) * m, 0);
   for (const auto& p : truth) {
@@ -530,9 +539,36 @@ SceneScore scoreScene(const LocalOccupancy& g, const std::vector<Label>& lab,
   s.has_hazard_in_corridor = x_h < 1e8;
   s.first_hazard = s.has_hazard_in_corridor ? x_h : 0;
   s.first_occ = x_occ < 1e8 ? x_occ : 0;
-  const double limit = s.has_hazard_in_corridor ? x_h + cor.into : cor.clear_range;
+  const double limit = s.has_hazard_in_corridor ? x_h + into : cor.clear_range;
   s.blocked = x_occ <= limit;
   return s;
+}
+
+/** Text view of the local grid of one scene on stderr (x ahead up, y left
+ *  to the left): '#' occupied, '.' free, ' ' unknown; on hazard cells 'H',
+ *  'F', 'U'; then the voxel classes ('o' obstacle, 'g' ground). */
+void dumpScene(const Pipeline& pipe, const FrameResult& fr, const std::vector<Label>& lab,
+               double occ, double fre) {
+  const auto& g = pipe.grid();
+  const auto& e = pipe.elevation();
+  for (double x = 4.5; x > 0.2; x -= g.resolution()) {
+    std::string a, b;
+    for (double y = 1.0; y > -1.0; y -= g.resolution()) {
+      const int i = g.cellX(x), j = g.cellY(y);
+      const double pr = g.prob(i, j);
+      const bool hz = lab[static_cast<size_t>(i) * g.cells() + j] == Label::Hazard;
+      a += pr > occ ? (hz ? 'H' : '#') : pr < fre ? (hz ? 'F' : '.') : (hz ? 'U' : ' ');
+      const int ei = e.cellOf(x), ej = e.cellOf(y);
+      const auto vc = fr.voxel_classes.empty()
+                          ? VoxelClass::None
+                          : fr.voxel_classes[static_cast<size_t>(ei) * e.cells() + ej];
+      b += vc == VoxelClass::Obstacle ? 'o' : vc == VoxelClass::Ground ? 'g' : ' ';
+    }
+    std::fprintf(stderr, "%5.2f |%s|  |%s|\n", x, a.c_str(), b.c_str());
+  }
+  std::fprintf(stderr, "plane %s (%.4f %.4f %.4f %.4f), noise scale %.2f\n",
+               fr.plane_source.c_str(), fr.plane ? fr.plane->a : 0, fr.plane ? fr.plane->b : 0,
+               fr.plane ? fr.plane->c : 0, fr.plane ? fr.plane->d : 0, fr.noise_scale);
 }
 
 // ------------------------------------------------------------------ report
@@ -542,13 +578,6 @@ struct TypeTotals {
   size_t blocked = 0, clear = 0, blocked_out = 0, clear_out = 0, over_1pct = 0;
   std::vector<std::string> clear_list;
 };
-
-std::string pct(size_t num, size_t den) {
-  if (den == 0) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.1f %%", 100.0 * num / den);
-  return b;
-}
 
 void printTable(const std::vector<TypeTotals>& tt, bool list_clear) {
   std::printf(
@@ -583,6 +612,7 @@ int main(int argc, char** argv) try {
   bool list_clear = false;
   std::string only;
   MountRanges ranges;
+  int dump = -1;  // scene whose grid is printed on stderr
   std::vector<std::string> sets;
   for (int a = 1; a < argc; ++a) {
     const std::string k = argv[a];
@@ -610,12 +640,14 @@ int main(int argc, char** argv) try {
       ranges.noise_max = std::stod(val());
     else if (k == "--roll")
       ranges.roll_deg = std::stod(val());
+    else if (k == "--dump")
+      dump = std::stoi(val());
     else if (k == "--only")
       only = val();
     else {
       std::cerr << "usage: hazard_random [--profile P] [--scenes N] [--seed S] [--decimation D] "
                    "[--margin M] [--calib-error DEG] [--noise-max F] [--roll DEG] "
-                   "[--set section.key=value]... [--list-clear] [--only TYPE]\n";
+                   "[--set section.key=value]... [--list-clear] [--only TYPE] [--dump N]\n";
       return k == "--help" || k == "-h" ? 0 : 2;
     }
   }
@@ -652,9 +684,14 @@ int main(int argc, char** argv) try {
     FrameInput in;
     in.cloud = &cloud;
     in.sensor_origin = {static_cast<float>(kCamX), 0.f, static_cast<float>(mt.h)};
-    pipe.process(in, false);
+    const FrameResult fr = pipe.process(in, false);
     const auto lab = labels(sc, pipe.grid(), margin);
-    const SceneScore s = scoreScene(pipe.grid(), lab, truth, cor, pp.occupied_threshold);
+    if (n == dump) dumpScene(pipe, fr, lab, pp.occupied_threshold, pp.free_threshold);
+    // A ramp is blocked up to 0.3 m past its foot (it rises there at most
+    // 8 cm at 15 deg); every other hazard 0.1 m past its nearest cell.
+    const bool ramp = type == Type::RampSteep;
+    const SceneScore s =
+        scoreScene(pipe.grid(), lab, truth, cor, ramp ? 0.3 : cor.into, pp.occupied_threshold);
     auto& x = tt[static_cast<size_t>(type)];
     ++x.scenes;
     x.in_range += sc.in_range;
@@ -666,11 +703,12 @@ int main(int argc, char** argv) try {
     (sc.in_range ? (s.blocked ? x.blocked : x.clear) : (s.blocked ? x.blocked_out : x.clear_out))++;
     const bool bad = (s.blocked != s.has_hazard_in_corridor);
     if (bad || list_clear) {
-      char b[120];
-      std::snprintf(b, sizeof b, "scene %d%s: %s; hazard at %.2f m, first occupied %.2f m", n,
-                    sc.in_range ? "" : " (out of range)", s.blocked ? "blocked" : "clear",
-                    s.first_hazard, s.first_occ);
-      if (bad) x.clear_list.push_back(std::string(b) + " -- " + sc.describe);
+      char b[160];
+      std::snprintf(b, sizeof b,
+                    "scene %d%s: %s; hazard at %.2f m, first occupied %.2f m, false obstacles %s",
+                    n, sc.in_range ? "" : " (out of range)", s.blocked ? "blocked" : "clear",
+                    s.first_hazard, s.first_occ, pct(s.trav_occ, s.trav).c_str());
+      x.clear_list.push_back(std::string(b) + " -- " + sc.describe);
     }
   }
   printTable(tt, list_clear);

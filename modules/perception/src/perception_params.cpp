@@ -86,6 +86,10 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
           .real("noise_k", &P::noise_k, "", 0, 20,
                 "voxel z+/z- farther than noise_k vertical noise sigmas at the voxel's range "
                 "(and means farther than noise_k standard errors) are not noise")
+          .real("noise_adapt_max", &P::noise_adapt_max, "", 1, 100,
+                "the depth noise measured in each frame (median over the voxels of their "
+                "vertical spread against depth_noise_std's prediction) raises the noise model "
+                "by up to this factor, never lowers it; 1: depth_noise_std as given")
           .real("mean_step", &P::mean_step, "m", 0, 1,
                 "a voxel whose mean elevation lies more than this (plus noise_k standard errors) "
                 "off the ground plane is an obstacle: small boxes >= 20 mm ([Puente14, App. Sec. "

@@ -48,6 +48,9 @@ struct PerceptionParams {
   double k_n = 0.0005;         ///< sample normalisation factor
   double d_min = 3;            ///< minimum number of points
   double k_m = 0.8;            ///< amplitude gain of the voxel density
+  // Measured noise (docs/perceive.md "Noise measured per frame")
+  /// each frame's measured depth noise raises depth_noise_std by at most this factor (1: off)
+  double noise_adapt_max = 4;
   double occupied_threshold = 0.55;  ///< cells above count as occupied
   double free_threshold = 0.45;      ///< cells below count as free
   double logodds_max = 4.6;          ///< |log-odds| clamp of the fused grid (p 0.99)
