@@ -67,6 +67,10 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
                 "RRT-GPD: a plane whose height at the robot is within this of z = 0 (the floor "
                 "the mounting says the robot stands on) ends the seed attempts; the plane "
                 "nearest to z = 0 wins, one farther is reported in summary.json")
+          .real("prior_tilt_deg", &P::prior_tilt_deg, "deg", 0, 90,
+                "uncertainty of the mounting's pitch and of its roll (each): the steep-ground "
+                "rule measures slopes against the ground plane while it is tilted less than "
+                "sqrt(2) times this from the robot frame's level, against that level otherwise")
           .real("seed_max_elevation", &P::seed_max_elevation, "m", 0, 100,
                 "the RRT seed must lie within this height of the floor the robot stands on "
                 "(robot frame z = 0): the robot pose is the initial guess of [Garrote17, Alg. 1]")

@@ -67,10 +67,16 @@ size_t markSteepGround(const ElevationGrid& g, const Plane& plane, const Percept
   thread_local Sums s(m);
   if (s.m != m) s = Sums(m);
   buildSums(g, p, o, classes, min_n, s);
-  // The plane's own gradient (per cell): slopes are measured against the
-  // floor the robot stands on, not against the robot frame's z.
+  // Slopes are measured against the plane (the floor the robot stands on,
+  // free of the mounting's calibration error) while it is level within the
+  // mounting's tilt uncertainty; a plane tilted more (fitted to a ramp that
+  // fills the view) is no reference: the robot frame's level is.
   const double r = g.resolution();
-  const double g0i = -plane.a / plane.c * r, g0j = -plane.b / plane.c * r;
+  // (pitch and roll each off by up to prior_tilt_deg: a tilt of sqrt(2) times that)
+  const bool level =
+      std::acos(std::min(1.0, std::abs(plane.c))) <= std::sqrt(2.0) * p.prior_tilt_deg * M_PI / 180;
+  const double g0i = level ? -plane.a / plane.c * r : 0.0,
+               g0j = level ? -plane.b / plane.c * r : 0.0;
   const double tmax = std::tan(p.max_slope_deg * M_PI / 180.0) * r;  // rise per cell
   const double need = kMinFill * (2 * kHalf + 1) * (2 * kHalf + 1);
   std::vector<int32_t> steep;

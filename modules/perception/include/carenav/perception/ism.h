@@ -72,7 +72,8 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
 /** Rule 4, steep ground (docs/perceive.md): for every ground voxel the
  *  least-squares slope of the ground voxel means over the 7 x 7 cells around
  *  it (at least half of them judged: N_z >= d_min), measured against `plane`
- *  (the floor the robot stands on); steeper than max_slope_deg, and farther
+ *  (the floor the robot stands on) when it is tilted less than sqrt(2) prior_tilt_deg,
+ *  else against the robot frame's level; steeper than max_slope_deg, and farther
  *  from level than noise_k standard errors of that slope, makes it an
  *  obstacle, whatever rules 1-3 said. Returns the voxels changed. */
 size_t markSteepGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
