@@ -693,20 +693,25 @@ int main(int argc, char** argv) try {
     const SceneScore s =
         scoreScene(pipe.grid(), lab, truth, cor, ramp ? 0.3 : cor.into, pp.occupied_threshold);
     auto& x = tt[static_cast<size_t>(type)];
+    // A hazard whose nearest part in the corridor lies in the camera's blind
+    // zone (nearer than the floor the lowest row sees) is out of range too.
+    const double true_low = (mt.pitch + mt.pitch_err + cam.vfov / 2) * kDeg;
+    const double near_view = kCamX + (true_low < M_PI / 2 ? mt.h / std::tan(true_low) : 0.0);
+    const bool in_range = sc.in_range && !(s.has_hazard_in_corridor && s.first_hazard < near_view);
     ++x.scenes;
-    x.in_range += sc.in_range;
+    x.in_range += in_range;
     x.hazard += s.hazard;
     x.hazard_occ += s.hazard_occ;
     x.trav += s.trav;
     x.trav_occ += s.trav_occ;
     x.over_1pct += s.trav > 0 && s.trav_occ * 100 > s.trav;
-    (sc.in_range ? (s.blocked ? x.blocked : x.clear) : (s.blocked ? x.blocked_out : x.clear_out))++;
+    (in_range ? (s.blocked ? x.blocked : x.clear) : (s.blocked ? x.blocked_out : x.clear_out))++;
     const bool bad = (s.blocked != s.has_hazard_in_corridor);
     if (bad || list_clear) {
       char b[160];
       std::snprintf(b, sizeof b,
                     "scene %d%s: %s; hazard at %.2f m, first occupied %.2f m, false obstacles %s",
-                    n, sc.in_range ? "" : " (out of range)", s.blocked ? "blocked" : "clear",
+                    n, in_range ? "" : " (out of range)", s.blocked ? "blocked" : "clear",
                     s.first_hazard, s.first_occ, pct(s.trav_occ, s.trav).c_str());
       x.clear_list.push_back(std::string(b) + " -- " + sc.describe);
     }
