@@ -10,6 +10,14 @@ namespace carenav::perception {
 
 namespace {
 
+/** What one image column has seen so far, from the bottom row up. */
+struct Column {
+  bool floor = false, has_prev = false;
+  Point3f f, prev;  // the last floor point and the one before it
+  int f_row = 0, prev_row = 0, gap = 0, lower = 0;
+  float level = 0;  // floor level over the plane, followed along the column
+};
+
 struct ColumnScan {
   const Cloud& c;
   const Plane& plane;
@@ -19,8 +27,11 @@ struct ColumnScan {
   double so;  // sensor height over the plane
   size_t edges = 0;
 
-  double thr(const Point3f& q) const {
-    return std::max(p.d_pth, p.noise_k * verticalNoise(p, &o, q.x, q.y, q.z));
+  /** Squared rule-1 threshold at q: max(d_pth, noise_k sigma_v)^2 (no sqrt). */
+  double thr2(const Point3f& q) const {
+    const double dx = q.x - o.x, dy = q.y - o.y, dz = q.z - o.z;
+    const double kv = p.noise_k * p.depth_noise_std;
+    return std::max(p.d_pth * p.d_pth, kv * kv * (dx * dx + dy * dy + dz * dz) * dz * dz);
   }
   /** Depression of the ray o -> q below the plane, rad. */
   double depression(const Point3f& q) const {
@@ -55,53 +66,49 @@ struct ColumnScan {
     }
     ++edges;
   }
-  void column(size_t u);
+  void step(Column& k, const Point3f& q, int v);
+  void finish(Column& k);
 };
 
-/** One image column from the bottom row (nearest floor) up. The floor level
- *  is followed along the column (a running mean of the floor points' height
- *  over the plane, starting on the plane): a plane a degree off, or a gentle
- *  ramp, moves it slowly; a drop or an obstacle jumps off it. */
-void ColumnScan::column(size_t u) {
-  constexpr int kGap = 4;          // invalid rows in a row: not the sensor's random dropout
-  constexpr int kLower = 2;        // lower returns in a row: not one noisy sample
-  constexpr double kFollow = 0.2;  // weight of a new floor point in the level
-  const size_t W = c.width, H = c.height;
-  bool floor = false, has_prev = false;
-  Point3f f, prev;
-  int f_row = 0, prev_row = 0, gap = 0, lower = 0;
-  double level = 0;
-  auto gapIsDrop = [&]() {
-    return floor && gap >= kGap && has_prev && floorExpected(f, prev, prev_row - f_row, kGap);
-  };
-  for (size_t v = H; v-- > 0;) {
-    const Point3f& q = c.points[v * W + u];
-    if (!validPoint(q)) {
-      gap += floor;
-      continue;
-    }
-    const double sd = plane.signedDistance(q.x, q.y, q.z) - level, t = thr(q);
-    if (std::abs(sd) <= t) {
-      if (gapIsDrop()) mark(f);
-      if (floor) {
-        prev = f;
-        prev_row = f_row;
-        has_prev = true;
-      }
-      f = q;
-      f_row = static_cast<int>(v);
-      floor = true;
-      gap = lower = 0;
-      level += kFollow * sd;
-    } else if (sd < -t) {
-      if (floor && ++lower == kLower) mark(f);
-    } else {
-      floor = has_prev = false;  // above the floor: an obstacle (its shadow is no drop)
-      gap = lower = 0;
-      level = 0;
-    }
+// Per column, from the bottom row (nearest floor) up. The floor level is
+// followed along the column (a running mean of the floor points' height over
+// the plane, starting on the plane): a plane a degree off, or a gentle ramp,
+// moves it slowly; a drop or an obstacle jumps off it.
+constexpr int kGap = 4;          // invalid rows in a row: not the sensor's random dropout
+constexpr int kLower = 2;        // lower returns in a row: not one noisy sample
+constexpr float kFollow = 0.2f;  // weight of a new floor point in the level
+
+/** After kGap invalid rows following a floor point: a drop when the floor
+ *  there would still have returned within depth_max. */
+void ColumnScan::finish(Column& k) {
+  if (k.floor && k.gap >= kGap && k.has_prev &&
+      floorExpected(k.f, k.prev, k.prev_row - k.f_row, kGap))
+    mark(k.f);
+}
+
+void ColumnScan::step(Column& k, const Point3f& q, int v) {
+  if (!validPoint(q)) {
+    k.gap += k.floor;
+    return;
   }
-  if (gapIsDrop()) mark(f);
+  const double sd = plane.signedDistance(q.x, q.y, q.z) - k.level;
+  if (sd * sd <= thr2(q)) {
+    finish(k);
+    if (k.floor) {
+      k.prev = k.f;
+      k.prev_row = k.f_row;
+      k.has_prev = true;
+    }
+    k.f = q;
+    k.f_row = v;
+    k.floor = true;
+    k.gap = k.lower = 0;
+    k.level += kFollow * static_cast<float>(sd);
+  } else if (sd < 0) {
+    if (k.floor && ++k.lower == kLower) mark(k.f);
+  } else {
+    k = Column{};  // above the floor: an obstacle (its shadow is no drop)
+  }
 }
 
 }  // namespace
@@ -113,7 +120,16 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
                p,    sensor_origin,
                grid, plane.signedDistance(sensor_origin.x, sensor_origin.y, sensor_origin.z)};
   if (s.so <= 0) return 0;
-  for (size_t u = 0; u < c.width; ++u) s.column(u);
+  // Row by row from the bottom (memory order), one state per column. Every
+  // column: stepping over some (two per cell at depth_max) let a curb of the
+  // randomised benchmark through.
+  thread_local std::vector<Column> cols;
+  cols.assign(c.width, Column{});
+  for (size_t v = c.height; v-- > 0;) {
+    const Point3f* row = &c.points[v * c.width];
+    for (size_t u = 0; u < c.width; ++u) s.step(cols[u], row[u], static_cast<int>(v));
+  }
+  for (auto& k : cols) s.finish(k);
   return s.edges;
 }
 
