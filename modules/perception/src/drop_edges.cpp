@@ -12,10 +12,9 @@ namespace {
 
 /** What one image column has seen so far, from the bottom row up. */
 struct Column {
-  bool floor = false, has_prev = false;
-  Point3f f, prev;  // the last floor point and the one before it
-  int f_row = 0, prev_row = 0, gap = 0, lower = 0;
-  float level = 0;  // floor level over the plane, followed along the column
+  int f_row = -1, prev_row = -1;  // rows of the last floor point and the one before (-1: none)
+  int gap = 0, lower = 0;         // invalid rows / lower returns since the last floor point
+  float level = 0;                // floor level over the plane, followed along the column
 };
 
 struct ColumnScan {
@@ -66,8 +65,11 @@ struct ColumnScan {
     }
     ++edges;
   }
-  void step(Column& k, const Point3f& q, int v);
-  void finish(Column& k);
+  void step(Column& k, size_t u, int v);
+  void finish(Column& k, size_t u);
+  const Point3f& at(int v, size_t u) const {
+    return c.points[static_cast<size_t>(v) * c.width + u];
+  }
 };
 
 // Per column, from the bottom row (nearest floor) up. The floor level is
@@ -80,32 +82,27 @@ constexpr float kFollow = 0.2f;  // weight of a new floor point in the level
 
 /** After kGap invalid rows following a floor point: a drop when the floor
  *  there would still have returned within depth_max. */
-void ColumnScan::finish(Column& k) {
-  if (k.floor && k.gap >= kGap && k.has_prev &&
-      floorExpected(k.f, k.prev, k.prev_row - k.f_row, kGap))
-    mark(k.f);
+void ColumnScan::finish(Column& k, size_t u) {
+  if (k.f_row >= 0 && k.gap >= kGap && k.prev_row >= 0 &&
+      floorExpected(at(k.f_row, u), at(k.prev_row, u), k.prev_row - k.f_row, kGap))
+    mark(at(k.f_row, u));
 }
 
-void ColumnScan::step(Column& k, const Point3f& q, int v) {
+void ColumnScan::step(Column& k, size_t u, int v) {
+  const Point3f& q = at(v, u);
   if (!validPoint(q)) {
-    k.gap += k.floor;
+    k.gap += k.f_row >= 0;
     return;
   }
-  const double sd = plane.signedDistance(q.x, q.y, q.z) - k.level;
-  if (sd * sd <= thr2(q)) {
-    finish(k);
-    if (k.floor) {
-      k.prev = k.f;
-      k.prev_row = k.f_row;
-      k.has_prev = true;
-    }
-    k.f = q;
+  const double sd = plane.signedDistance(q.x, q.y, q.z) - k.level, sd2 = sd * sd;
+  if (sd2 <= p.d_pth * p.d_pth || sd2 <= thr2(q)) {
+    finish(k, u);
+    k.prev_row = k.f_row;
     k.f_row = v;
-    k.floor = true;
     k.gap = k.lower = 0;
     k.level += kFollow * static_cast<float>(sd);
   } else if (sd < 0) {
-    if (k.floor && ++k.lower == kLower) mark(k.f);
+    if (k.f_row >= 0 && ++k.lower == kLower) mark(at(k.f_row, u));
   } else {
     k = Column{};  // above the floor: an obstacle (its shadow is no drop)
   }
@@ -125,11 +122,9 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
   // randomised benchmark through.
   thread_local std::vector<Column> cols;
   cols.assign(c.width, Column{});
-  for (size_t v = c.height; v-- > 0;) {
-    const Point3f* row = &c.points[v * c.width];
-    for (size_t u = 0; u < c.width; ++u) s.step(cols[u], row[u], static_cast<int>(v));
-  }
-  for (auto& k : cols) s.finish(k);
+  for (size_t v = c.height; v-- > 0;)
+    for (size_t u = 0; u < c.width; ++u) s.step(cols[u], u, static_cast<int>(v));
+  for (size_t u = 0; u < c.width; ++u) s.finish(cols[u], u);
   return s.edges;
 }
 
