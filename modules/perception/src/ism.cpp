@@ -265,6 +265,7 @@ IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const Percep
   VoxelNoise noise{thr, se};
   std::vector<int32_t> queue = applyPlaneRules(g, plane, p, o, classes, noise);
   if (p.max_slope_deg > 0) st.rescued_voxels = rescueSlopes(g, p, noise, classes, queue);
+  if (p.max_slope_deg > 0) st.rescued_voxels += rescueGentleGround(g, plane, p, o, classes);
   st.steep_voxels = markSteepGround(g, plane, p, o, classes);
   for (size_t k = 0; k < mm; ++k) {
     if (classes[k] == VoxelClass::None) continue;

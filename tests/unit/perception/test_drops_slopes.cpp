@@ -214,3 +214,26 @@ TEST(SteepGround, SlopesAreMeasuredAgainstALevelPlaneAndGentleRampsStayGround) {
   classifyRamp(0, tilted, st);
   EXPECT_EQ(st.steep_voxels, 0u);
 }
+
+TEST(GentleGround, ASixDegreeRampWithThePitchOffByThreeDegreesStaysMostlyFree) {
+  // Camera 0.7 m / 25 deg, truly 28 deg: rules 1-3 leave 68 % of the ramp
+  // (seen 1.5-3.5 m) occupied; rule 5 (the 7 x 7 fit over every judged voxel,
+  // no steeper than max_slope_deg) keeps most of it ground.
+  Scene s;
+  s.floor(-10, 1.5).ramp(1.5, 3.5, 2 * std::tan(6 * kDeg));
+  const auto sh = perceive(s, camera(0.7, 28), camera(0.7, 25), kProfileNoise);
+  EXPECT_LT(occupiedSeen(sh.pipe->grid(), 0.5, 3.5, -1, 1), 0.25);
+  EXPECT_GT(sh.r.ism.rescued_voxels, 1000u);
+}
+
+TEST(GentleGround, SlopesAreMeasuredAgainstTheFloorNearTheRobotWhenThePlaneLeansOnTheRamp) {
+  // Twice the noise, the pitch off by +3 deg: the plane leans 4.9 deg (floor
+  // and ramp), beyond the mounting's tilt uncertainty; the floor near the
+  // robot is the reference, the 5 deg ramp is not steep (56 % of it was
+  // occupied against the robot frame's level).
+  Scene s;
+  s.floor(-10, 1.5).ramp(1.5, 3.5, 2 * std::tan(5 * kDeg));
+  const auto sh = perceive(s, camera(0.7, 28), camera(0.7, 25), 2 * kProfileNoise);
+  EXPECT_LT(occupiedSeen(sh.pipe->grid(), 0.5, 3.5, -1, 1), 0.05);
+  EXPECT_LT(sh.r.ism.steep_voxels, 50u);
+}

@@ -71,13 +71,25 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
 
 /** Rule 4, steep ground (docs/perceive.md): for every ground voxel the
  *  least-squares slope of the ground voxel means over the 7 x 7 cells around
- *  it (at least half of them judged: N_z >= d_min), measured against `plane`
- *  (the floor the robot stands on) when it is tilted less than sqrt(2) prior_tilt_deg,
- *  else against the robot frame's level; steeper than max_slope_deg, and farther
- *  from level than noise_k standard errors of that slope, makes it an
- *  obstacle, whatever rules 1-3 said. Returns the voxels changed. */
+ *  it (at least half of them judged: N_z >= d_min), measured against the
+ *  floor the robot stands on (the plane of the ground voxels within 0.75 m
+ *  of the nearest one, else `plane`, whichever is tilted less than sqrt(2)
+ *  prior_tilt_deg from the robot frame's level; else that level); steeper
+ *  than max_slope_deg, and by more than noise_k standard errors of that
+ *  slope, makes it an obstacle, whatever rules 1-3 and 5 said. Windows with
+ *  residuals beyond the noise (a step inside) and voxels within noise_k depth
+ *  sigmas of depth_max are not judged. Returns the voxels changed. */
 size_t markSteepGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
                        const Point3f* sensor_origin, std::vector<VoxelClass>& classes);
+
+/** Rule 5, gentle ground: breadth first from the ground voxels, an obstacle
+ *  voxel (N_z >= d_min) becomes ground when the least-squares plane over
+ *  every judged voxel of the 7 x 7 cells around it (at least half of them)
+ *  leaves residuals of the noise's size (no step, no edge inside) and is no
+ *  steeper than max_slope_deg against the reference of rule 4. Runs after
+ *  rule 3, before rule 4. Returns the voxels changed. */
+size_t rescueGentleGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                          const Point3f* sensor_origin, std::vector<VoxelClass>& classes);
 
 /** Voxel density, [Garrote17, Eq. 4], h floored at 1 mm (docs/design.md, 'Floored height'). */
 double voxelDensity(const ElevationCell& c, double cell_area, const PerceptionParams& p);
