@@ -602,9 +602,8 @@ void printTable(const std::vector<TypeTotals>& tt, bool list_clear) {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) try {
+/** Command line (see the head of the file). */
+struct Options {
   std::string profile_path = std::string(CARENAV_SOURCE_DIR) + "/ini/isr-aiwalker.ini";
   int scenes = 550, dec = 1;
   long seed = 1;
@@ -614,6 +613,11 @@ int main(int argc, char** argv) try {
   MountRanges ranges;
   int dump = -1;  // scene whose grid is printed on stderr
   std::vector<std::string> sets;
+};
+
+/** Parses the command line; returns an exit code when the run must stop
+ *  (usage), -1 otherwise. */
+int parseArgs(int argc, char** argv, Options& o) {
   for (int a = 1; a < argc; ++a) {
     const std::string k = argv[a];
     auto val = [&]() -> std::string {
@@ -621,29 +625,29 @@ int main(int argc, char** argv) try {
       return argv[++a];
     };
     if (k == "--profile")
-      profile_path = val();
+      o.profile_path = val();
     else if (k == "--scenes")
-      scenes = std::stoi(val());
+      o.scenes = std::stoi(val());
     else if (k == "--seed")
-      seed = std::stol(val());
+      o.seed = std::stol(val());
     else if (k == "--decimation")
-      dec = std::stoi(val());
+      o.dec = std::stoi(val());
     else if (k == "--margin")
-      margin = std::stod(val());
+      o.margin = std::stod(val());
     else if (k == "--set")
-      sets.push_back(val());
+      o.sets.push_back(val());
     else if (k == "--list-clear")
-      list_clear = true;
+      o.list_clear = true;
     else if (k == "--calib-error")
-      ranges.calib_deg = std::stod(val());
+      o.ranges.calib_deg = std::stod(val());
     else if (k == "--noise-max")
-      ranges.noise_max = std::stod(val());
+      o.ranges.noise_max = std::stod(val());
     else if (k == "--roll")
-      ranges.roll_deg = std::stod(val());
+      o.ranges.roll_deg = std::stod(val());
     else if (k == "--dump")
-      dump = std::stoi(val());
+      o.dump = std::stoi(val());
     else if (k == "--only")
-      only = val();
+      o.only = val();
     else {
       std::cerr << "usage: hazard_random [--profile P] [--scenes N] [--seed S] [--decimation D] "
                    "[--margin M] [--calib-error DEG] [--noise-max F] [--roll DEG] "
@@ -651,72 +655,97 @@ int main(int argc, char** argv) try {
       return k == "--help" || k == "-h" ? 0 : 2;
     }
   }
-  if (scenes < 1 || dec < 1) throw std::runtime_error("--scenes and --decimation must be >= 1");
-  perception::registerProfileSections();
-  Profile prof = Profile::load(profile_path);
-  prof.applyOverrides(sets);
-  const auto pp = prof.section<PerceptionParams>("perception");
-  const auto robot = prof.section<RobotParams>("robot");
+  if (o.scenes < 1 || o.dec < 1) throw std::runtime_error("--scenes and --decimation must be >= 1");
+  return -1;
+}
+
+/** What the profile gives: the perception parameters, the depth camera and
+ *  the walker's corridor. */
+struct Setup {
+  PerceptionParams pp;
   Camera cam;
+  Corridor cor{0, 0, 3.0, 0.1};
+};
+
+Setup loadSetup(const Options& o) {
+  perception::registerProfileSections();
+  Profile prof = Profile::load(o.profile_path);
+  prof.applyOverrides(o.sets);
+  Setup su;
+  su.pp = prof.section<PerceptionParams>("perception");
+  const auto robot = prof.section<RobotParams>("robot");
   bool found = false;
   for (const auto& s : loadSensors(prof))
     if (s.type == "depth-camera" && !found) {
-      cam = {s.width, s.height, s.fov, s.vfov, s.range_min, s.range_max, s.noise_std};
+      su.cam = {s.width, s.height, s.fov, s.vfov, s.range_min, s.range_max, s.noise_std};
       found = true;
     }
-  if (!found) throw std::runtime_error(profile_path + ": no depth-camera sensor");
-  Corridor cor{0, 0, 3.0, 0.1};
+  if (!found) throw std::runtime_error(o.profile_path + ": no depth-camera sensor");
   for (const auto& p : robot.footprint) {
-    cor.half_width = std::max(cor.half_width, std::abs(p.y));
-    cor.front = std::max(cor.front, p.x);
+    su.cor.half_width = std::max(su.cor.half_width, std::abs(p.y));
+    su.cor.front = std::max(su.cor.front, p.x);
   }
+  return su;
+}
+
+/** Adds scene n's score to its type's totals. */
+void addScore(int n, const Scene& sc, const Mount& mt, const Camera& cam, const SceneScore& s,
+              bool list_clear, TypeTotals& x) {
+  // A hazard whose nearest part in the corridor lies in the camera's blind
+  // zone (nearer than the floor the lowest row sees) is out of range too.
+  const double true_low = (mt.pitch + mt.pitch_err + cam.vfov / 2) * kDeg;
+  const double near_view = kCamX + (true_low < M_PI / 2 ? mt.h / std::tan(true_low) : 0.0);
+  const bool in_range = sc.in_range && !(s.has_hazard_in_corridor && s.first_hazard < near_view);
+  ++x.scenes;
+  x.in_range += in_range;
+  x.hazard += s.hazard;
+  x.hazard_occ += s.hazard_occ;
+  x.trav += s.trav;
+  x.trav_occ += s.trav_occ;
+  x.over_1pct += s.trav > 0 && s.trav_occ * 100 > s.trav;
+  (in_range ? (s.blocked ? x.blocked : x.clear) : (s.blocked ? x.blocked_out : x.clear_out))++;
+  if (s.blocked == s.has_hazard_in_corridor && !list_clear) return;
+  char b[160];
+  std::snprintf(b, sizeof b,
+                "scene %d%s: %s; hazard at %.2f m, first occupied %.2f m, false obstacles %s", n,
+                in_range ? "" : " (out of range)", s.blocked ? "blocked" : "clear", s.first_hazard,
+                s.first_occ, pct(s.trav_occ, s.trav).c_str());
+  x.clear_list.push_back(std::string(b) + " -- " + sc.describe);
+}
+
+/** Scene n: generated, rendered, perceived and scored. */
+void runScene(int n, const Options& o, const Setup& su, std::vector<TypeTotals>& tt) {
+  Gen g{std::mt19937_64(static_cast<uint64_t>(o.seed) * 1000003ULL + n)};
+  const Type type = static_cast<Type>(n % static_cast<int>(Type::kCount));
+  if (!o.only.empty() && o.only != typeName(type)) return;
+  const Mount mt = makeMount(g, o.ranges);
+  const Scene sc = makeScene(g, type, mt, su.cam, su.pp);
+  std::vector<Point3f> truth;
+  const Cloud cloud = render(sc, mt, su.cam, o.dec, g, truth);
+  Pipeline pipe(su.pp, Method::RrtGpd);
+  FrameInput in;
+  in.cloud = &cloud;
+  in.sensor_origin = {static_cast<float>(kCamX), 0.f, static_cast<float>(mt.h)};
+  const FrameResult fr = pipe.process(in, false);
+  const auto lab = labels(sc, pipe.grid(), o.margin);
+  if (n == o.dump) dumpScene(pipe, fr, lab, su.pp.occupied_threshold, su.pp.free_threshold);
+  // A ramp is blocked up to 0.3 m past its foot (it rises there at most
+  // 8 cm at 15 deg); every other hazard 0.1 m past its nearest cell.
+  const double into = type == Type::RampSteep ? 0.3 : su.cor.into;
+  const SceneScore s = scoreScene(pipe.grid(), lab, truth, su.cor, into, su.pp.occupied_threshold);
+  addScore(n, sc, mt, su.cam, s, o.list_clear, tt[static_cast<size_t>(type)]);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  Options o;
+  const int rc = parseArgs(argc, argv, o);
+  if (rc >= 0) return rc;
+  const Setup su = loadSetup(o);
   std::vector<TypeTotals> tt(static_cast<size_t>(Type::kCount));
-  const int ntypes = static_cast<int>(Type::kCount);
-  for (int n = 0; n < scenes; ++n) {
-    Gen g{std::mt19937_64(static_cast<uint64_t>(seed) * 1000003ULL + n)};
-    const Type type = static_cast<Type>(n % ntypes);
-    if (!only.empty() && only != typeName(type)) continue;
-    const Mount mt = makeMount(g, ranges);
-    const Scene sc = makeScene(g, type, mt, cam, pp);
-    std::vector<Point3f> truth;
-    const Cloud cloud = render(sc, mt, cam, dec, g, truth);
-    Pipeline pipe(pp, Method::RrtGpd);
-    FrameInput in;
-    in.cloud = &cloud;
-    in.sensor_origin = {static_cast<float>(kCamX), 0.f, static_cast<float>(mt.h)};
-    const FrameResult fr = pipe.process(in, false);
-    const auto lab = labels(sc, pipe.grid(), margin);
-    if (n == dump) dumpScene(pipe, fr, lab, pp.occupied_threshold, pp.free_threshold);
-    // A ramp is blocked up to 0.3 m past its foot (it rises there at most
-    // 8 cm at 15 deg); every other hazard 0.1 m past its nearest cell.
-    const bool ramp = type == Type::RampSteep;
-    const SceneScore s =
-        scoreScene(pipe.grid(), lab, truth, cor, ramp ? 0.3 : cor.into, pp.occupied_threshold);
-    auto& x = tt[static_cast<size_t>(type)];
-    // A hazard whose nearest part in the corridor lies in the camera's blind
-    // zone (nearer than the floor the lowest row sees) is out of range too.
-    const double true_low = (mt.pitch + mt.pitch_err + cam.vfov / 2) * kDeg;
-    const double near_view = kCamX + (true_low < M_PI / 2 ? mt.h / std::tan(true_low) : 0.0);
-    const bool in_range = sc.in_range && !(s.has_hazard_in_corridor && s.first_hazard < near_view);
-    ++x.scenes;
-    x.in_range += in_range;
-    x.hazard += s.hazard;
-    x.hazard_occ += s.hazard_occ;
-    x.trav += s.trav;
-    x.trav_occ += s.trav_occ;
-    x.over_1pct += s.trav > 0 && s.trav_occ * 100 > s.trav;
-    (in_range ? (s.blocked ? x.blocked : x.clear) : (s.blocked ? x.blocked_out : x.clear_out))++;
-    const bool bad = (s.blocked != s.has_hazard_in_corridor);
-    if (bad || list_clear) {
-      char b[160];
-      std::snprintf(b, sizeof b,
-                    "scene %d%s: %s; hazard at %.2f m, first occupied %.2f m, false obstacles %s",
-                    n, in_range ? "" : " (out of range)", s.blocked ? "blocked" : "clear",
-                    s.first_hazard, s.first_occ, pct(s.trav_occ, s.trav).c_str());
-      x.clear_list.push_back(std::string(b) + " -- " + sc.describe);
-    }
-  }
-  printTable(tt, list_clear);
+  for (int n = 0; n < o.scenes; ++n) runScene(n, o, su, tt);
+  printTable(tt, o.list_clear);
   return 0;
 } catch (const std::exception& e) {
   std::cerr << "hazard_random: " << e.what() << "\n";
