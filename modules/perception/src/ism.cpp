@@ -30,6 +30,26 @@ double verticalNoise(const PerceptionParams& p, const Point3f* o, double x, doub
   return p.depth_noise_std * r * std::abs(dz);
 }
 
+double measuredNoiseRatio(const ElevationGrid& g, const PerceptionParams& p, const Point3f* o) {
+  constexpr uint32_t kMinSamples = 8;
+  constexpr size_t kMinVoxels = 20;
+  if (!o || p.depth_noise_std <= 0) return 0.0;
+  thread_local std::vector<float> ratio;
+  ratio.clear();
+  const int m = g.cells();
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      const ElevationCell& c = g.at(i, j);
+      if (c.n < kMinSamples) continue;
+      const double sv = verticalNoise(p, o, g.centre(i), g.centre(j), c.mean);
+      if (sv > 1e-6) ratio.push_back(static_cast<float>(std::sqrt(c.variance()) / sv));
+    }
+  if (ratio.size() < kMinVoxels) return 0.0;
+  auto mid = ratio.begin() + ratio.size() / 2;
+  std::nth_element(ratio.begin(), mid, ratio.end());
+  return *mid;
+}
+
 namespace {
 
 // ------------------------------------------------------------ classification
@@ -245,6 +265,8 @@ IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const Percep
   VoxelNoise noise{thr, se};
   std::vector<int32_t> queue = applyPlaneRules(g, plane, p, o, classes, noise);
   if (p.max_slope_deg > 0) st.rescued_voxels = rescueSlopes(g, p, noise, classes, queue);
+  if (p.max_slope_deg > 0) st.rescued_voxels += rescueGentleGround(g, plane, p, o, classes);
+  st.steep_voxels = markSteepGround(g, plane, p, o, classes);
   for (size_t k = 0; k < mm; ++k) {
     if (classes[k] == VoxelClass::None) continue;
     ++st.voxels;

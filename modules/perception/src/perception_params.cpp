@@ -67,6 +67,10 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
                 "RRT-GPD: a plane whose height at the robot is within this of z = 0 (the floor "
                 "the mounting says the robot stands on) ends the seed attempts; the plane "
                 "nearest to z = 0 wins, one farther is reported in summary.json")
+          .real("prior_tilt_deg", &P::prior_tilt_deg, "deg", 0, 90,
+                "uncertainty of the mounting's pitch and of its roll (each): the steep-ground "
+                "rule measures slopes against the ground plane while it is tilted less than "
+                "sqrt(2) times this from the robot frame's level, against that level otherwise")
           .real("seed_max_elevation", &P::seed_max_elevation, "m", 0, 100,
                 "the RRT seed must lie within this height of the floor the robot stands on "
                 "(robot frame z = 0): the robot pose is the initial guess of [Garrote17, Alg. 1]")
@@ -86,6 +90,10 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
           .real("noise_k", &P::noise_k, "", 0, 20,
                 "voxel z+/z- farther than noise_k vertical noise sigmas at the voxel's range "
                 "(and means farther than noise_k standard errors) are not noise")
+          .real("noise_adapt_max", &P::noise_adapt_max, "", 1, 100,
+                "the depth noise measured in each frame (median over the voxels of their "
+                "vertical spread against depth_noise_std's prediction) raises the noise model "
+                "by up to this factor, never lowers it; 1: depth_noise_std as given")
           .real("mean_step", &P::mean_step, "m", 0, 1,
                 "a voxel whose mean elevation lies more than this (plus noise_k standard errors) "
                 "off the ground plane is an obstacle: small boxes >= 20 mm ([Puente14, App. Sec. "

@@ -8,6 +8,7 @@
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -99,8 +100,15 @@ FrameResult Pipeline::process(const FrameInput& in, bool virtual_scans) {
     }
     r.timing_ms.emplace_back("ground_plane", msSince(t));
     t = Clock::now();
-    if (r.plane)
-      r.ism = integrateIsm(elev_, *r.plane, p_, grid_, &r.voxel_classes, &in.sensor_origin);
+    if (r.plane) {
+      PerceptionParams q = p_;
+      if (p_.noise_adapt_max > 1)
+        r.noise_scale =
+            std::clamp(measuredNoiseRatio(elev_, p_, &in.sensor_origin), 1.0, p_.noise_adapt_max);
+      q.depth_noise_std *= r.noise_scale;
+      r.ism = integrateIsm(elev_, *r.plane, q, grid_, &r.voxel_classes, &in.sensor_origin);
+      r.drop_edges = markImageDropEdges(c, *r.plane, q, in.sensor_origin, grid_);
+    }
     r.timing_ms.emplace_back("ism", msSince(t));
   } else if (method_ == Method::HeightBand) {
     r.points_valid = c.validCount();
@@ -230,6 +238,7 @@ void writeFrameGround(JsonWriter& j, const FrameResult& r, Method method) {
     j.key("rrt_trees").value(r.ground.trees_grown);
     j.key("rrt_trees_refused").value(r.ground.trees_refused);
   }
+  j.key("depth_noise_scale").value(r.noise_scale);
   j.key("rrt_nodes").value(static_cast<uint64_t>(r.ground.nodes.size()));
   j.key("ransac_inliers").value(static_cast<uint64_t>(r.ground.ransac_inliers));
 }

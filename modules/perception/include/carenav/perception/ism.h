@@ -33,6 +33,7 @@ enum class VoxelClass : uint8_t { None = 0, Ground, Obstacle };
 struct IsmStats {
   size_t voxels = 0, obstacle_voxels = 0, ground_voxels = 0;
   size_t rescued_voxels = 0;  ///< off-plane voxels kept as ground by rule 3
+  size_t steep_voxels = 0;    ///< ground voxels on slopes steeper than max_slope_deg (rule 4)
 };
 IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
                         const Point3f* sensor_origin, std::vector<VoxelClass>& classes);
@@ -41,12 +42,54 @@ IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const Percep
  *  (0 without a noise model). */
 double verticalNoise(const PerceptionParams& p, const Point3f* o, double x, double y, double z);
 
+/** Measured depth noise against the model: the median, over the voxels with
+ *  at least 8 samples, of their vertical standard deviation divided by
+ *  verticalNoise() at the voxel. Most voxels of a downward-looking camera
+ *  are floor, whose spread inside a 5 cm cell is the noise. 0 when there is
+ *  no noise model or fewer than 20 such voxels. */
+double measuredNoiseRatio(const ElevationGrid& g, const PerceptionParams& p,
+                          const Point3f* sensor_origin);
+
 /** ISM integration of one elevation grid (robot frame) given the ground
  *  plane (robot frame), into `grid` at its current robot pose. `classes`
  *  (optional, one per elevation cell) receives each voxel's class. */
 IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
                       LocalOccupancy& grid, std::vector<VoxelClass>* classes = nullptr,
                       const Point3f* sensor_origin = nullptr);
+
+/** Drop edges from an organised cloud (robot frame, one point per pixel, NaN
+ *  where no return), column by column from the bottom row up: after a floor
+ *  point (within the rule-1 threshold of `plane`), kGap (4) invalid rows where
+ *  the floor would still return within depth_max, or two returns in a row
+ *  below the floor by more than the rule-1 threshold, mean the floor ends
+ *  there: occupied evidence on the 0.1 m past that floor point (the edge
+ *  line). An obstacle point (above the floor) ends the floor run: the shadow
+ *  behind a box is no drop. Returns the edges marked (0 for an unorganised
+ *  cloud). Call between grid.beginFrame() and grid.endFrame(). */
+size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionParams& p,
+                          const Point3f& sensor_origin, LocalOccupancy& grid);
+
+/** Rule 4, steep ground (docs/perceive.md): for every ground voxel the
+ *  least-squares slope of the ground voxel means over the 7 x 7 cells around
+ *  it (at least half of them judged: N_z >= d_min), measured against the
+ *  floor the robot stands on (the plane of the ground voxels within 0.75 m
+ *  of the nearest one, else `plane`, whichever is tilted less than sqrt(2)
+ *  prior_tilt_deg from the robot frame's level; else that level); steeper
+ *  than max_slope_deg, and by more than noise_k standard errors of that
+ *  slope, makes it an obstacle, whatever rules 1-3 and 5 said. Windows with
+ *  residuals beyond the noise (a step inside) and voxels within noise_k depth
+ *  sigmas of depth_max are not judged. Returns the voxels changed. */
+size_t markSteepGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                       const Point3f* sensor_origin, std::vector<VoxelClass>& classes);
+
+/** Rule 5, gentle ground: breadth first from the ground voxels, an obstacle
+ *  voxel (N_z >= d_min) becomes ground when the least-squares plane over
+ *  every judged voxel of the 7 x 7 cells around it (at least half of them)
+ *  leaves residuals of the noise's size (no step, no edge inside) and is no
+ *  steeper than max_slope_deg against the reference of rule 4. Runs after
+ *  rule 3, before rule 4. Returns the voxels changed. */
+size_t rescueGentleGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                          const Point3f* sensor_origin, std::vector<VoxelClass>& classes);
 
 /** Voxel density, [Garrote17, Eq. 4], h floored at 1 mm (docs/design.md, 'Floored height'). */
 double voxelDensity(const ElevationCell& c, double cell_area, const PerceptionParams& p);

@@ -31,6 +31,7 @@ struct PerceptionParams {
   int seed_attempts = 5;                 ///< seeds tried when a tree stays small
   int min_tree_nodes = 10;               ///< smaller trees are refused (never the ground plane)
   double prior_height_tolerance = 0.02;  ///< m, plane height at the robot consistent with z = 0
+  double prior_tilt_deg = 3;             ///< deg, mounting tilt uncertainty (slope reference)
   double seed_max_elevation = 0.3;  ///< m, seed elevation within this of the robot's floor (z = 0)
   int ransac_iterations = 200;      ///< final RANSAC (and the RANSAC-only baseline)
   double ransac_threshold = 0.02;   ///< m, inlier distance of the RANSAC planes
@@ -48,6 +49,9 @@ struct PerceptionParams {
   double k_n = 0.0005;         ///< sample normalisation factor
   double d_min = 3;            ///< minimum number of points
   double k_m = 0.8;            ///< amplitude gain of the voxel density
+  // Measured noise (docs/perceive.md "Noise measured per frame")
+  /// each frame's measured depth noise raises depth_noise_std by at most this factor (1: off)
+  double noise_adapt_max = 4;
   double occupied_threshold = 0.55;  ///< cells above count as occupied
   double free_threshold = 0.45;      ///< cells below count as free
   double logodds_max = 4.6;          ///< |log-odds| clamp of the fused grid (p 0.99)

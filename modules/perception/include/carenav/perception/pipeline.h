@@ -36,6 +36,10 @@ struct FrameResult {
    *  the robot's floor than prior_height_tolerance; empty otherwise. */
   std::string plane_note;
   GroundPlaneResult ground;
+  /** depth_noise_std of this frame over the profile's: the measured noise
+   *  (measuredNoiseRatio) clamped to [1, noise_adapt_max]. */
+  double noise_scale = 1;
+  size_t drop_edges = 0;  ///< image columns where the floor ends at a drop (markImageDropEdges)
   IsmStats ism;
   CellCounts counts;
   std::vector<std::pair<std::string, double>> timing_ms;  ///< per stage, then "total"

@@ -1,0 +1,131 @@
+// Drop edges from the image columns of an organised cloud: missing or lower
+// returns where the floor should be (docs/perceive.md "Drops the camera
+// cannot see into").
+#include <carenav/perception/ism.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace carenav::perception {
+
+namespace {
+
+/** What one image column has seen so far, from the bottom row up. */
+struct Column {
+  int f_row = -1, prev_row = -1;  // rows of the last floor point and the one before (-1: none)
+  int gap = 0, lower = 0;         // invalid rows / lower returns since the last floor point
+  float level = 0;                // floor level over the plane, followed along the column
+};
+
+struct ColumnScan {
+  const Cloud& c;
+  const Plane& plane;
+  const PerceptionParams& p;
+  const Point3f& o;
+  LocalOccupancy& grid;
+  double so;  // sensor height over the plane
+  size_t edges = 0;
+
+  /** Squared rule-1 threshold at q: max(d_pth, noise_k sigma_v)^2 (no sqrt). */
+  double thr2(const Point3f& q) const {
+    const double dx = q.x - o.x, dy = q.y - o.y, dz = q.z - o.z;
+    const double kv = p.noise_k * p.depth_noise_std;
+    return std::max(p.d_pth * p.d_pth, kv * kv * (dx * dx + dy * dy + dz * dz) * dz * dz);
+  }
+  /** Depression of the ray o -> q below the plane, rad. */
+  double depression(const Point3f& q) const {
+    const double dx = q.x - o.x, dy = q.y - o.y, dz = q.z - o.z;
+    const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
+    return std::asin(std::clamp((so - plane.signedDistance(q.x, q.y, q.z)) / r, -1.0, 1.0));
+  }
+  /** Whether the floor `rows` pixel rows beyond the floor point f (prev: the
+   *  floor point `step_rows` rows before it) would return within depth_max:
+   *  then missing returns there mean no floor. */
+  bool floorExpected(const Point3f& f, const Point3f& prev, int step_rows, int rows) const {
+    const double bf = depression(f), bp = depression(prev);
+    const double delta = (bp - bf) / step_rows;  // per row
+    if (delta <= 0) return false;
+    const double b = bf - rows * delta;
+    if (b <= 0) return false;
+    const double r = so / std::sin(b);
+    return r + p.noise_k * p.depth_noise_std * r * r < p.depth_max;
+  }
+  /** Occupied evidence on the edge line: from the floor point f on along the
+   *  ray's horizontal direction over kEdgeLength. */
+  void mark(const Point3f& f) {
+    constexpr double kEdgeLength = 0.1;  // m
+    const double hx = f.x - o.x, hy = f.y - o.y, len = std::hypot(hx, hy);
+    if (len < 1e-6) return;
+    const auto& rb = grid.robot();
+    const double ca = std::cos(rb.phi()), sa = std::sin(rb.phi());
+    for (double d = 0; d <= kEdgeLength + 1e-9; d += 0.5 * grid.resolution()) {
+      const double x = f.x + hx / len * d, y = f.y + hy / len * d;
+      grid.addEvidence(grid.cellX(rb.x() + ca * x - sa * y), grid.cellY(rb.y() + sa * x + ca * y),
+                       static_cast<float>(p.k_m));
+    }
+    ++edges;
+  }
+  void step(Column& k, size_t u, int v);
+  void finish(Column& k, size_t u);
+  const Point3f& at(int v, size_t u) const {
+    return c.points[static_cast<size_t>(v) * c.width + u];
+  }
+};
+
+// Per column, from the bottom row (nearest floor) up. The floor level is
+// followed along the column (a running mean of the floor points' height over
+// the plane, starting on the plane): a plane a degree off, or a gentle ramp,
+// moves it slowly; a drop or an obstacle jumps off it.
+constexpr int kGap = 4;          // invalid rows in a row: not the sensor's random dropout
+constexpr int kLower = 2;        // lower returns in a row: not one noisy sample
+constexpr float kFollow = 0.2f;  // weight of a new floor point in the level
+
+/** After kGap invalid rows following a floor point: a drop when the floor
+ *  there would still have returned within depth_max. */
+void ColumnScan::finish(Column& k, size_t u) {
+  if (k.f_row >= 0 && k.gap >= kGap && k.prev_row >= 0 &&
+      floorExpected(at(k.f_row, u), at(k.prev_row, u), k.prev_row - k.f_row, kGap))
+    mark(at(k.f_row, u));
+}
+
+void ColumnScan::step(Column& k, size_t u, int v) {
+  const Point3f& q = at(v, u);
+  if (!validPoint(q)) {
+    k.gap += k.f_row >= 0;
+    return;
+  }
+  const double sd = plane.signedDistance(q.x, q.y, q.z) - k.level, sd2 = sd * sd;
+  if (sd2 <= p.d_pth * p.d_pth || sd2 <= thr2(q)) {
+    finish(k, u);
+    k.prev_row = k.f_row;
+    k.f_row = v;
+    k.gap = k.lower = 0;
+    k.level += kFollow * static_cast<float>(sd);
+  } else if (sd < 0) {
+    if (k.f_row >= 0 && ++k.lower == kLower) mark(at(k.f_row, u));
+  } else {
+    k = Column{};  // above the floor: an obstacle (its shadow is no drop)
+  }
+}
+
+}  // namespace
+
+size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionParams& p,
+                          const Point3f& sensor_origin, LocalOccupancy& grid) {
+  if (!c.organised()) return 0;
+  ColumnScan s{c,    plane,
+               p,    sensor_origin,
+               grid, plane.signedDistance(sensor_origin.x, sensor_origin.y, sensor_origin.z)};
+  if (s.so <= 0) return 0;
+  // Row by row from the bottom (memory order), one state per column. Every
+  // column: stepping over some (two per cell at depth_max) let a curb of the
+  // randomised benchmark through.
+  thread_local std::vector<Column> cols;
+  cols.assign(c.width, Column{});
+  for (size_t v = c.height; v-- > 0;)
+    for (size_t u = 0; u < c.width; ++u) s.step(cols[u], u, static_cast<int>(v));
+  for (size_t u = 0; u < c.width; ++u) s.finish(cols[u], u);
+  return s.edges;
+}
+
+}  // namespace carenav::perception
