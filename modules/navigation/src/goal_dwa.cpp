@@ -83,7 +83,9 @@ class GoalDwa final : public LocalPlanner {
         ++out.evaluated;
         // Admissible: brakes before the first contact, and the supervisor
         // (same footprint, braking model and safe distance) passes it unchanged.
-        if (!tr.leaves_map && canBrake(s, tr.time_to_collision, r_, r_.safe_distance) &&
+        if (!tr.leaves_map &&
+            canBrake(s, tr.time_to_collision, r_, r_.safe_distance,
+                     in.map->footprint().circumscribed) &&
             brakingScale(*in.map, in.pose, s, r_, d_.sim_step) >= 1.0) {
           ++out.admissible;
           const double ts = std::min(g_.score_time, d_.sim_time);

@@ -99,7 +99,7 @@ void ObstacleMemory::add(const WorldScan& s, double t) {
       const uint64_t k = key(s.origin.x + dx * d / len, s.origin.y + dy * d / len);
       if (!visited_.first(keyX(k), keyY(k))) continue;  // cleared already by this scan
       auto it = cells_.find(k);
-      if (it != cells_.end() && it->second < t) cells_.erase(it);
+      if (it != cells_.end() && it->second.t < t) cells_.erase(it);
     }
   }
   // Hits whose cell lies beyond the radius would be dropped by the next
@@ -110,20 +110,21 @@ void ObstacleMemory::add(const WorldScan& s, double t) {
     const uint64_t k = key(s.ends[i].x, s.ends[i].y);
     const double x = (static_cast<double>(keyX(k)) + 0.5) * res_;
     const double y = (static_cast<double>(keyY(k)) + 0.5) * res_;
-    if (std::hypot(x - centre.x, y - centre.y) <= radius_) cells_[k] = t;
+    if (std::hypot(x - centre.x, y - centre.y) > radius_) continue;
+    cells_[k] = {t, static_cast<float>(s.ends[i].x), static_cast<float>(s.ends[i].y)};
   }
 }
 
 void ObstacleMemory::addPoints(const std::vector<TPoint2D>& points, double t) {
   for (const auto& p : points)
-    if (finite(p)) cells_[key(p.x, p.y)] = t;
+    if (finite(p)) cells_[key(p.x, p.y)] = {t, static_cast<float>(p.x), static_cast<float>(p.y)};
 }
 
 void ObstacleMemory::prune(double now, const TPoint2D& robot) {
   for (auto it = cells_.begin(); it != cells_.end();) {
     const double x = (static_cast<double>(keyX(it->first)) + 0.5) * res_;
     const double y = (static_cast<double>(keyY(it->first)) + 0.5) * res_;
-    if (now - it->second > persistence_ || std::hypot(x - robot.x, y - robot.y) > radius_)
+    if (now - it->second.t > persistence_ || std::hypot(x - robot.x, y - robot.y) > radius_)
       it = cells_.erase(it);
     else
       ++it;
@@ -133,10 +134,9 @@ void ObstacleMemory::prune(double now, const TPoint2D& robot) {
 std::vector<TPoint2D> ObstacleMemory::points() const {
   std::vector<TPoint2D> out;
   out.reserve(cells_.size());
-  for (const auto& [k, t] : cells_) {
-    (void)t;
-    out.push_back(
-        {(static_cast<double>(keyX(k)) + 0.5) * res_, (static_cast<double>(keyY(k)) + 0.5) * res_});
+  for (const auto& [k, c] : cells_) {
+    (void)k;
+    out.push_back({c.x, c.y});
   }
   return out;
 }
@@ -147,17 +147,20 @@ uint64_t FreeSpaceHistory::key(double x, double y) const { return packCell(x, y,
 
 void FreeSpaceHistory::markFree(double x, double y, double t) {
   if (!std::isfinite(x) || !std::isfinite(y)) return;
-  auto [it, fresh] = cells_.try_emplace(key(x, y), Stretch{t, t});
-  if (fresh) return;
+  Stretch& c = cells_[key(x, y)];
   // A hit since, or a gap longer than a second between sightings, starts a
   // new stretch.
-  if (it->second.hit >= it->second.last || t - it->second.last > 1.0) it->second.first = t;
-  it->second.last = t;
+  if (c.hit >= c.last || t - c.last > 1.0) {
+    c.first = t;
+    c.hit_before = c.hit;
+  }
+  c.last = t;
 }
 
 void FreeSpaceHistory::markHit(double x, double y, double t) {
-  const auto it = cells_.find(key(x, y));
-  if (it != cells_.end()) it->second.hit = std::max(it->second.hit, t);
+  if (!std::isfinite(x) || !std::isfinite(y)) return;
+  Stretch& c = cells_[key(x, y)];
+  c.hit = std::max(c.hit, t);
 }
 
 void FreeSpaceHistory::addScan(const WorldScan& s, double t) {
@@ -179,29 +182,35 @@ void FreeSpaceHistory::addScan(const WorldScan& s, double t) {
     }
   }
   for (size_t i = 0; i < s.ends.size(); ++i)
-    if (i < s.hit.size() && s.hit[i]) markHit(s.ends[i].x, s.ends[i].y, t);
+    if (i < s.hit.size() && s.hit[i] &&
+        std::hypot(s.ends[i].x - s.origin.x, s.ends[i].y - s.origin.y) <= radius_)
+      markHit(s.ends[i].x, s.ends[i].y, t);
 }
 
-bool FreeSpaceHistory::recentlyFree(double x, double y, double now, double window,
-                                    double min_free) const {
+bool FreeSpaceHistory::recentlyFree(double x, double y, double now, double window, double min_free,
+                                    double static_memory) const {
   const auto it = cells_.find(key(x, y));
   if (it == cells_.end()) return false;
-  return now - it->second.last <= window && it->second.last - it->second.first >= min_free;
+  const Stretch& c = it->second;
+  return now - c.last <= window && c.last - c.first >= min_free &&
+         (static_memory <= 0 || c.first - c.hit_before > static_memory);
 }
 
-bool FreeSpaceHistory::movedIn(double x, double y, double now, double window,
-                               double min_free) const {
-  if (!recentlyFree(x, y, now, window, min_free)) return false;
+bool FreeSpaceHistory::movedIn(double x, double y, double now, double window, double min_free,
+                               double static_memory) const {
+  if (!recentlyFree(x, y, now, window, min_free, static_memory)) return false;
   int around = 0;
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx)
-      if ((dx || dy) && recentlyFree(x + dx * res_, y + dy * res_, now, window, min_free)) ++around;
+      if ((dx || dy) &&
+          recentlyFree(x + dx * res_, y + dy * res_, now, window, min_free, static_memory))
+        ++around;
   return around >= 7;
 }
 
-void FreeSpaceHistory::prune(double now, double keep) {
+void FreeSpaceHistory::prune(double now, double keep, double keep_hits) {
   for (auto it = cells_.begin(); it != cells_.end();)
-    if (now - it->second.last > keep)
+    if (now - it->second.last > keep && now - it->second.hit > keep_hits)
       it = cells_.erase(it);
     else
       ++it;
@@ -288,10 +297,15 @@ LocalCostmap::LocalCostmap(const LocalMapParams& p, const Footprint& footprint)
     : res_(p.resolution),
       decay_(p.cost_decay),
       contact_(std::max(p.resolution * 0.5, p.footprint_padding + p.resolution * 0.5)),
+      padding_(p.footprint_padding),
       fp_(footprint) {
   n_ = std::max(8, static_cast<int>(std::ceil(p.local_size / res_)));
   far_ = n_ * res_ * 2;
   dist_.assign(static_cast<size_t>(n_) * n_, static_cast<float>(far_));
+  mdist_ = dist_;
+  occ_.assign(dist_.size(), 0);
+  px_.assign(dist_.size(), 0.f);
+  py_.assign(dist_.size(), 0.f);
 }
 
 // Clamped like the memory's keys: a point far off the grid is just outside.
@@ -305,14 +319,27 @@ void LocalCostmap::build(const TPoint2D& c, const std::vector<TPoint2D>& obstacl
   x0_ = std::floor(c.x / res_) * res_ - (n_ / 2) * res_;
   y0_ = std::floor(c.y / res_) * res_ - (n_ / 2) * res_;
   std::vector<uint8_t> free(static_cast<size_t>(n_) * n_, 1);
+  std::fill(occ_.begin(), occ_.end(), 0);
+  std::fill(mdist_.begin(), mdist_.end(), static_cast<float>(far_));
   obstacle_cells_ = 0;
   auto mark = [&](int ix, int iy) {
     if (ix < 0 || iy < 0 || ix >= n_ || iy >= n_) return;
-    uint8_t& f = free[static_cast<size_t>(iy) * n_ + ix];
-    if (f) ++obstacle_cells_;
-    f = 0;
+    const size_t i = static_cast<size_t>(iy) * n_ + ix;
+    if (free[i]) ++obstacle_cells_;
+    free[i] = 0;
+    if (!occ_[i]) occ_[i] = 2;
   };
-  for (const auto& o : obstacles) mark(cellX(o.x), cellY(o.y));
+  for (const auto& o : obstacles) {
+    const int ix = cellX(o.x), iy = cellY(o.y);
+    if (ix < 0 || iy < 0 || ix >= n_ || iy >= n_) continue;
+    mark(ix, iy);
+    // The cell's point (the last when several fall in it: the memory holds
+    // one per cell of this size).
+    const size_t i = static_cast<size_t>(iy) * n_ + ix;
+    occ_[i] = 1;
+    px_[i] = static_cast<float>(o.x);
+    py_[i] = static_cast<float>(o.y);
+  }
   if (static_map) {
     for (int iy = 0; iy < n_; ++iy)
       for (int ix = 0; ix < n_; ++ix) {
@@ -346,6 +373,7 @@ void LocalCostmap::addMoving(const std::vector<TPoint2D>& moving, double inflati
   for (size_t i = 0; i < d2.size(); ++i) {
     if (std::isinf(d2[i])) continue;
     const double d = std::max(0.0, std::sqrt(d2[i]) * res_ - inflation);
+    mdist_[i] = static_cast<float>(d);
     if (d < dist_[i]) dist_[i] = static_cast<float>(d);
   }
 }
@@ -377,6 +405,93 @@ FootprintCheck LocalCostmap::check(const TPose2D& pose, double cap) const {
   return check(pose, cap, std::cos(pose.phi), std::sin(pose.phi));
 }
 
+double LocalCostmap::outlineDistanceOf(double wx, double wy, const TPose2D& pose, double c,
+                                       double s) const {
+  const double dx = wx - pose.x, dy = wy - pose.y;
+  const double rx = c * dx + s * dy, ry = -s * dx + c * dy;  // robot frame
+  double d = std::numeric_limits<double>::infinity();
+  const auto& poly = fp_.polygon;
+  for (size_t i = 0; i < poly.size(); ++i)
+    d = std::min(d, segmentDistance(poly[i], poly[(i + 1) % poly.size()], rx, ry));
+  return fp_.contains(rx, ry) ? -d : d;
+}
+
+double LocalCostmap::outlineDistanceNear(double wx, double wy, const TPose2D& pose, double c,
+                                         double s, int reach) const {
+  const int cx = cellX(wx), cy = cellY(wy);
+  double best = std::numeric_limits<double>::infinity();
+  for (int iy = std::max(0, cy - reach); iy <= std::min(n_ - 1, cy + reach); ++iy)
+    for (int ix = std::max(0, cx - reach); ix <= std::min(n_ - 1, cx + reach); ++ix) {
+      const size_t i = static_cast<size_t>(iy) * n_ + ix;
+      if (!occ_[i]) continue;
+      if (occ_[i] == 1) {
+        best = std::min(best, outlineDistanceOf(px_[i], py_[i], pose, c, s));
+        continue;
+      }
+      // A static map's cell: its centre less half its diagonal (a square).
+      const double ox = x0_ + (ix + 0.5) * res_, oy = y0_ + (iy + 0.5) * res_;
+      best = std::min(best, outlineDistanceOf(ox, oy, pose, c, s) - res_ * M_SQRT1_2);
+    }
+  return best;
+}
+
+bool LocalCostmap::sampleContact(double wx, double wy, const TPose2D& pose, double c, double s,
+                                 double& clearance) const {
+  const int ix = cellX(wx), iy = cellY(wy);
+  const size_t i = static_cast<size_t>(iy) * n_ + ix;
+  const double d = dist_[i];
+  if (mdist_[i] < contact_) return true;  // a moving obstacle's grown region
+  if (d > padding_ + 2 * res_) {
+    clearance = std::min(clearance, d - res_ * 0.5);
+    return false;
+  }
+  // Near: the exact points, within the cells that can hold the nearest one.
+  const int reach = static_cast<int>(std::ceil(d / res_ + 1.5));
+  const double e = outlineDistanceNear(wx, wy, pose, c, s, reach);
+  if (e < padding_) return true;
+  clearance = std::min({clearance, e, mdist_[i] - res_ * 0.5});
+  return false;
+}
+
+bool LocalCostmap::interiorContact(double wx, double wy, const TPose2D& pose, double c,
+                                   double s) const {
+  if (distance(wx, wy) >= res_ * 0.75) return false;
+  // An obstacle cell under the sample: a static or moving one is inside; a
+  // sensed point only if it is (or touches the outline).
+  const size_t k = static_cast<size_t>(cellY(wy)) * n_ + cellX(wx);
+  return occ_[k] != 1 || mdist_[k] < res_ * 0.75 ||
+         outlineDistanceOf(px_[k], py_[k], pose, c, s) < padding_;
+}
+
+double LocalCostmap::outlineClearance(const TPose2D& pose) const {
+  const double c = std::cos(pose.phi), s = std::sin(pose.phi);
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& b : fp_.boundary) {
+    const double wx = pose.x + c * b.x - s * b.y, wy = pose.y + s * b.x + c * b.y;
+    if (!inside(wx, wy)) return 0;
+    const size_t i = static_cast<size_t>(cellY(wy)) * n_ + cellX(wx);
+    if (mdist_[i] <= 0) return 0;
+    best = std::min(best, static_cast<double>(mdist_[i]));
+    const double d = dist_[i];
+    if (d > padding_ + 2 * res_) {
+      best = std::min(best, d - res_ * 0.5);
+      continue;
+    }
+    best = std::min(
+        best, outlineDistanceNear(wx, wy, pose, c, s, static_cast<int>(std::ceil(d / res_ + 1.5))));
+  }
+  // Obstacles under the footprint: a sensed point inside it gives its
+  // (negative) depth; a static or moving cell, 0.
+  for (const auto& q : fp_.interior) {
+    const double wx = pose.x + c * q.x - s * q.y, wy = pose.y + s * q.x + c * q.y;
+    if (distance(wx, wy) >= res_ * 0.75) continue;
+    const size_t k = static_cast<size_t>(cellY(wy)) * n_ + cellX(wx);
+    if (occ_[k] != 1 || mdist_[k] < res_ * 0.75) return 0;
+    best = std::min(best, outlineDistanceOf(px_[k], py_[k], pose, c, s));
+  }
+  return best;
+}
+
 FootprintCheck LocalCostmap::check(const TPose2D& pose, double cap, double c, double s) const {
   FootprintCheck r;
   const double dc = distance(pose.x, pose.y);
@@ -405,26 +520,25 @@ FootprintCheck LocalCostmap::check(const TPose2D& pose, double cap, double c, do
   // (Only where the whole footprint is on the grid: a sample off it must be seen.)
   const bool on_grid = inside(pose.x + fp_.circumscribed, pose.y + fp_.circumscribed) &&
                        inside(pose.x - fp_.circumscribed, pose.y - fp_.circumscribed);
-  const double need_b = std::max(cap + res_ * 0.5, contact_);
+  const double need_b = std::max(cap + res_ * 0.5, padding_ + 2 * res_);
   for (const auto& g : fp_.boundary_groups) {
     const double gd = distance(pose.x + c * g.centre.x - s * g.centre.y,
                                pose.y + s * g.centre.x + c * g.centre.y);
     if (on_grid && gd - g.radius - slack >= need_b) continue;
     for (size_t i = g.begin; i < g.end; ++i) {
       const auto& b = fp_.boundary[i];
-      const double d = distance(pose.x + c * b.x - s * b.y, pose.y + s * b.x + c * b.y);
-      if (d < 0) {
+      const double wx = pose.x + c * b.x - s * b.y, wy = pose.y + s * b.x + c * b.y;
+      if (!inside(wx, wy)) {
         r.outside = true;
         return r;
       }
-      // A cell centre closer than half a cell (plus the padding) counts as
-      // touching the outline.
-      if (d < contact_) {
+      // Touching: the nearest obstacle (the sensed point itself, not its
+      // cell) within the padding of the outline, or inside it.
+      if (sampleContact(wx, wy, pose, c, s, clearance)) {
         r.collision = true;
         r.clearance = 0;
         return r;
       }
-      clearance = std::min(clearance, d - res_ * 0.5);
     }
   }
   // An obstacle wholly inside the footprint is far from the outline: look
@@ -436,7 +550,7 @@ FootprintCheck LocalCostmap::check(const TPose2D& pose, double cap, double c, do
       if (on_grid && gd - g.radius - slack >= res_ * 0.75) continue;
       for (size_t i = g.begin; i < g.end; ++i) {
         const auto& q = fp_.interior[i];
-        if (distance(pose.x + c * q.x - s * q.y, pose.y + s * q.x + c * q.y) < res_ * 0.75) {
+        if (interiorContact(pose.x + c * q.x - s * q.y, pose.y + s * q.x + c * q.y, pose, c, s)) {
           r.collision = true;
           r.clearance = 0;
           return r;

@@ -104,7 +104,14 @@ Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& c
   return tr;
 }
 
-bool canBrake(const Twist& cmd, double time_to_collision, const RobotParams& robot, double margin) {
+double marginTime(const Twist& cmd, double margin, double sweep_radius) {
+  const double av = std::abs(cmd.v), aw = std::abs(cmd.w);
+  if (av > 0) return margin / av;
+  return aw > 0 && sweep_radius > 0 ? margin / (aw * sweep_radius) : 0.0;
+}
+
+bool canBrake(const Twist& cmd, double time_to_collision, const RobotParams& robot, double margin,
+              double sweep_radius) {
   const double av = std::abs(cmd.v), aw = std::abs(cmd.w);
   if (time_to_collision <= 0) return false;  // already in contact
   if (av == 0 && aw == 0) return true;
@@ -112,7 +119,7 @@ bool canBrake(const Twist& cmd, double time_to_collision, const RobotParams& rob
   // after stop_time seconds, having covered the arc of stop_time / 2 seconds
   // at the command (v^2 / 2a for the translation, Eq. 4.1).
   const double stop_time = std::max(av / robot.acc_v, aw / robot.acc_w);
-  const double available = time_to_collision - (av > 0 ? margin / av : 0.0);
+  const double available = time_to_collision - marginTime(cmd, margin, sweep_radius);
   return stop_time / 2 <= available;
 }
 

@@ -3,6 +3,8 @@
 #include <carenav/navigation/navigation_params.h>
 #include <carenav/navigation/recovery.h>
 
+#include <set>
+
 namespace carenav::navigation {
 
 const ParamTable<NavigationParams>& NavigationParams::table() {
@@ -104,6 +106,10 @@ const ParamTable<PeopleParams>& PeopleParams::table() {
                 "an obstacle in a cell seen free this recently counts as moving")
           .real("dynamic_min_free", &P::dynamic_min_free, "s", 0, 10,
                 "... when the cell had been seen free for at least this long")
+          .real("static_memory", &P::static_memory, "s", 0, 600,
+                "... and had not been hit for this long before that (rays graze the edge cells "
+                "of a thin post from one side and hit them from another: static, not moving); "
+                "0: off (at 2-10 s a person crossing the robot's way is no longer seen moving)")
           .real("predict_horizon", &P::predict_horizon, "s", 0, 10,
                 "moving obstacles are tracked and swept along their estimated velocity this far "
                 "ahead (a person walking towards the robot blocks the lane it walks in); 0: off")
@@ -143,8 +149,11 @@ namespace {
 /** The keys of T's section: each was a key of [navigation] under the same name. */
 template <class T>
 std::vector<std::string> keysOf() {
+  // Keys added after [navigation] was split never had an old name.
+  static const std::set<std::string> kNewer = {"static_memory"};
   std::vector<std::string> keys;
-  for (const auto& spec : T::table().specs()) keys.push_back(spec.key);
+  for (const auto& spec : T::table().specs())
+    if (!kNewer.count(spec.key)) keys.push_back(spec.key);
   return keys;
 }
 }  // namespace

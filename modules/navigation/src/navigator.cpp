@@ -247,19 +247,21 @@ Navigator::Cycle Navigator::cycle(double now) {
   moving_.clear();
   const double grow = p_.predict_speed * p_.predict_time;
   if (grow > 0) {
-    free_history_.prune(now, p_.dynamic_window + 1.0);
+    free_history_.prune(now, p_.dynamic_window + 1.0, p_.static_memory);
     // Only what locates its obstacles precisely and is current: the lidar
     // hits and the depth frames' obstacle cells since the last cycle (not
     // the perception grid's fused cells, whose edges grow as a static box
     // is approached).
     for (const auto& o : fresh_hits_)
-      if (free_history_.movedIn(o.x, o.y, now, p_.dynamic_window, p_.dynamic_min_free))
+      if (free_history_.movedIn(o.x, o.y, now, p_.dynamic_window, p_.dynamic_min_free,
+                                p_.static_memory))
         moving_.push_back(o);
     fresh_hits_.clear();
     // A depth camera's cells are noisier: only bodies of cells moving in together.
     std::vector<TPoint2D> depth_moving;
     for (const auto& o : fresh_depth_hits_)
-      if (free_history_.movedIn(o.x, o.y, now, p_.dynamic_window, p_.dynamic_min_free))
+      if (free_history_.movedIn(o.x, o.y, now, p_.dynamic_window, p_.dynamic_min_free,
+                                p_.static_memory))
         depth_moving.push_back(o);
     fresh_depth_hits_.clear();
     for (const auto& c : clusterPoints(depth_moving, 1.5 * p_.resolution))

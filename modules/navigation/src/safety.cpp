@@ -26,44 +26,27 @@ double SafetySupervisor::timeToCollision(const LocalCostmap& map, const TPose2D&
   return std::numeric_limits<double>::infinity();
 }
 
-namespace {
-
-/** m, from the footprint at `pose` (outline and inside samples) to the
- *  nearest obstacle cell centre of `map` (0 off the map). */
-double footprintDistance(const LocalCostmap& map, const TPose2D& pose) {
-  const double co = std::cos(pose.phi), si = std::sin(pose.phi);
-  double best = std::numeric_limits<double>::infinity();
-  const Footprint& fp = map.footprint();
-  for (const auto* pts : {&fp.boundary, &fp.interior})
-    for (const auto& b : *pts) {
-      const double d = map.distance(pose.x + co * b.x - si * b.y, pose.y + si * b.x + co * b.y);
-      best = std::min(best, d < 0 ? 0.0 : d);
-    }
-  return best;
-}
-
-}  // namespace
-
 double brakingScale(const LocalCostmap& map, const TPose2D& pose, const Twist& c,
                     const RobotParams& r, double step, double margin) {
   if (c.v == 0 && c.w == 0) return 1;
   // Look as far ahead along the arc as braking from this command needs.
   const double av = std::abs(c.v), aw = std::abs(c.w);
   const double m = std::max(av / r.acc_v, aw / r.acc_w);  // stop time at full command
-  const double margin_t = av > 0 ? margin / av : 0.0;
+  const double margin_t = marginTime(c, margin, map.footprint().circumscribed);
   const double horizon = m / 2 + margin_t + step;
   const Trajectory tr = rollout(map, pose, c, horizon, step / 2, 0.0);
   if (tr.collides && map.check(pose).collision) {
     // Already in contact (within footprint_padding) where the robot stands:
     // a command that moves it away, its footprint's distance to the
     // obstacles never shrinking along the sweep, passes; anything else stops.
-    // The distances are those of the cells the footprint's samples fall in:
-    // when a sample lies on an obstacle cell (0) a move towards it cannot be
-    // told from one away, so nothing passes.
-    const double d0 = footprintDistance(map, pose);
+    // The distances are from the outline to the sensed points themselves
+    // (LocalCostmap::outlineClearance): an obstacle inside the footprint, or
+    // a static map's or a moving obstacle's cell under its outline, cannot
+    // tell a move towards it from one away, so nothing passes then.
+    const double d0 = map.outlineClearance(pose);
     if (d0 <= 0) return 0.0;
     for (double t = step / 2; t <= horizon + 1e-9; t += step / 2)
-      if (footprintDistance(map, integrateArc(pose, c.v, c.w, t)) < d0 - 1e-6) return 0.0;
+      if (map.outlineClearance(integrateArc(pose, c.v, c.w, t)) < d0 - 1e-6) return 0.0;
     return 1.0;
   }
   // leaving the map: unknown beyond, treated as an obstacle

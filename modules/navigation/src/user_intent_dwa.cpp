@@ -46,7 +46,8 @@ class UserIntentDwa final : public LocalPlanner {
       // Admissible (Eq. 4.1): the walker can brake safe_distance before the
       // first contact (the margin the safety supervisor enforces, so that
       // what is chosen here passes it).
-      if (!tr.leaves_map && canBrake(s, tr.time_to_collision, r_, r_.safe_distance)) {
+      if (!tr.leaves_map && canBrake(s, tr.time_to_collision, r_, r_.safe_distance,
+                                     in.map->footprint().circumscribed)) {
         ++out.admissible;
         // Eq. 4.10: C = |(v - v_u, w - w_u)| + k_s C_occ + k_0 / C_obs
         //               + k_1 [direction differs] + k_2 * pose term.

@@ -101,20 +101,19 @@ TEST(LocalCostmap, GroupedFootprintCheckAnswersAsSampleBySample) {
       continue;
     }
     for (const auto& b : fp.boundary) {
-      const double d = m.distance(pose.x + c * b.x - s * b.y, pose.y + s * b.x + c * b.y);
-      if (d < 0) {
+      const double wx = pose.x + c * b.x - s * b.y, wy = pose.y + s * b.x + c * b.y;
+      if (m.distance(wx, wy) < 0) {
         outside = true;
         break;
       }
-      if (d < contact) {
+      if (m.sampleContact(wx, wy, pose, c, s, clearance)) {
         collision = true;
         break;
       }
-      clearance = std::min(clearance, d - res * 0.5);
     }
     if (!outside && !collision && m.distance(pose.x, pose.y) < fp.circumscribed + res)
       for (const auto& q : fp.interior)
-        if (m.distance(pose.x + c * q.x - s * q.y, pose.y + s * q.x + c * q.y) < res * 0.75) {
+        if (m.interiorContact(pose.x + c * q.x - s * q.y, pose.y + s * q.x + c * q.y, pose, c, s)) {
           collision = true;
           break;
         }
@@ -134,6 +133,49 @@ TEST(LocalCostmap, GroupedFootprintCheckAnswersAsSampleBySample) {
   }
   EXPECT_GT(collisions, 100);
   EXPECT_GT(near, 1000);
+}
+
+namespace {
+
+/** The surface of a 0.15 m post (points every ~1 cm) centred at (x, y). */
+std::vector<TPoint2D> post(double x, double y) {
+  std::vector<TPoint2D> pts;
+  for (int k = 0; k < 48; ++k)
+    pts.push_back({x + 0.075 * std::cos(k * M_PI / 24), y + 0.075 * std::sin(k * M_PI / 24)});
+  return pts;
+}
+
+}  // namespace
+
+TEST(LocalCostmap, ContactIsMeasuredToTheSensedPointsNotToTheirCells) {
+  // The walker's side is at y = -0.325; a post whose surface is `gap` metres
+  // beside it, at every offset of the 5 cm cells.
+  const NavigationParams p = params();  // padding 0.02 m
+  LocalCostmap m(p, walker());
+  int contact_3cm = 0, contact_1cm = 0, n = 0;
+  for (double off = 0; off < 0.05; off += 0.005, ++n) {
+    m.build({0, 0}, post(0.0, -0.325 - 0.03 - 0.075 - off));
+    contact_3cm += m.check({0, -off, 0}).collision;
+    const double clearance = m.check({0, -off, 0}).clearance;
+    EXPECT_NEAR(clearance, 0.03, 0.011) << off;
+    m.build({0, 0}, post(0.0, -0.325 - 0.01 - 0.075 - off));
+    contact_1cm += m.check({0, -off, 0}).collision;
+  }
+  EXPECT_EQ(contact_3cm, 0) << "3 cm is beyond the 2 cm padding wherever the cells lie";
+  EXPECT_EQ(contact_1cm, n) << "1 cm is within it";
+}
+
+TEST(LocalCostmap, OutlineClearanceTellsAMoveAwayFromAPostFromOneTowardsIt) {
+  const NavigationParams p = params();
+  LocalCostmap m(p, walker());
+  m.build({0, 0}, post(0.0, -0.325 - 0.01 - 0.075));  // touching: 1 cm from the side
+  const double d0 = m.outlineClearance({0, 0, 0});
+  EXPECT_NEAR(d0, 0.01, 0.005);
+  EXPECT_GT(m.outlineClearance({0, 0.02, 0}), d0) << "sideways, away";
+  EXPECT_LT(m.outlineClearance({0, -0.005, 0}), d0) << "sideways, towards";
+  // A point inside the footprint: negative.
+  m.build({0, 0}, {{0.0, 0.0}});
+  EXPECT_LT(m.outlineClearance({0, 0, 0}), 0);
 }
 
 TEST(LocalCostmap, AnObstacleInsideTheFootprintIsACollision) {

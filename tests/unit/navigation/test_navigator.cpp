@@ -104,6 +104,25 @@ TEST(FreeSpaceHistoryTest, AnObstacleWhereFreeSpaceWasIsMovingAWallIsNot) {
   EXPECT_FALSE(h.recentlyFree(3.0, 0.0, 1.0, 1.5, 0.3)) << "never seen";
 }
 
+TEST(FreeSpaceHistoryTest, AThinPostsEdgeCellGrazedFreeIsNotMovingAPersonIs) {
+  FreeSpaceHistory h(0.05, 5.0);
+  // A post's edge cell: hit for 2 s while the robot approaches, then grazed
+  // by rays passing its free part for 0.6 s (the robot turned), then hit again.
+  for (int k = 0; k < 20; ++k) h.markHit(1.0, 0.0, 0.1 * k);
+  for (int k = 20; k < 26; ++k) h.markFree(1.0, 0.0, 0.1 * k);
+  h.markHit(1.0, 0.0, 2.6);
+  EXPECT_FALSE(h.recentlyFree(1.0, 0.0, 2.6, 1.5, 0.3, 10.0)) << "hit 0.1 s before: static";
+  EXPECT_TRUE(h.recentlyFree(1.0, 0.0, 2.6, 1.5, 0.3, 0.0)) << "without the rule: moving";
+  // Open floor, never hit, seen free for 0.6 s: a person stepping in moves.
+  for (int k = 20; k < 26; ++k) h.markFree(2.0, 0.0, 0.1 * k);
+  h.markHit(2.0, 0.0, 2.6);
+  EXPECT_TRUE(h.recentlyFree(2.0, 0.0, 2.6, 1.5, 0.3, 10.0));
+  // ... and a cell last hit 20 s before its free stretch counts as open floor again.
+  h.markHit(3.0, 0.0, 0.0);
+  for (int k = 200; k < 206; ++k) h.markFree(3.0, 0.0, 0.1 * k);
+  EXPECT_TRUE(h.recentlyFree(3.0, 0.0, 20.6, 1.5, 0.3, 10.0));
+}
+
 namespace {
 
 /** A 2D lidar scan at the robot's origin: 181 beams over 180 deg hitting a

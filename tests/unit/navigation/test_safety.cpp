@@ -34,6 +34,29 @@ SafetyInput fresh(const LocalCostmap& map, Twist cmd) {
   return in;
 }
 
+TEST(Safety, ATurnOnTheSpotKeepsTheSafeDistanceAtTheCorner) {
+  // A post beside the front-left corner: turning left sweeps the corner into
+  // it. The braking margin is of swept distance (the corner's travel), so a
+  // turn that would stop short of the post but within safe_distance of it
+  // is slowed or stopped; turning right, away from it, passes.
+  NavigationParams p;
+  RobotParams r = robot();
+  r.safe_distance = 0.1;
+  const SafetySupervisor sup(p, r);
+  LocalCostmap map(p, Footprint(r.footprint, p.resolution));
+  // The corner (0.25, 0.325) is 0.41 m from the origin; a post 0.12 m along
+  // its arc, turning left (contact after ~0.29 rad, braking from 0.75 rad/s
+  // at 1 rad/s^2 takes 0.28 rad: the corner stops ~0.004 m short).
+  const double a = std::atan2(0.325, 0.25) + 0.12 / std::hypot(0.25, 0.325);
+  const double R = std::hypot(0.25, 0.325);
+  map.build({0, 0}, {{R * std::cos(a), R * std::sin(a)}});
+  const SafetyDecision left = sup.apply(fresh(map, {0, 0.75}));
+  EXPECT_LT(std::abs(left.cmd.w), 0.75) << "slowed or stopped: " << left.reason;
+  EXPECT_NE(left.action, SafetyAction::Pass);
+  const SafetyDecision right = sup.apply(fresh(map, {0, -0.75}));
+  EXPECT_EQ(right.action, SafetyAction::Pass) << right.reason;
+}
+
 TEST(Safety, StaleSensorsOdometryOrIntentStop) {
   NavigationParams p;
   const SafetySupervisor sup(p, robot());

@@ -65,14 +65,20 @@ class ObstacleMemory {
   void addPoints(const std::vector<TPoint2D>& points, double t);
   /** Drops cells older than persistence or outside the radius. */
   void prune(double now, const TPoint2D& robot);
-  std::vector<TPoint2D> points() const;  ///< cell centres
+  std::vector<TPoint2D> points() const;  ///< one per cell: where in it the obstacle was seen
   size_t size() const { return cells_.size(); }
   void clear() { cells_.clear(); }
 
  private:
   uint64_t key(double x, double y) const;
   double res_, persistence_, radius_;
-  std::unordered_map<uint64_t, double> cells_;  // cell -> last time seen
+  /** A remembered cell: when it was last seen, and where in it the
+   *  obstacle was (the hit itself, not the cell's centre). */
+  struct Cell {
+    double t = 0;
+    float x = 0, y = 0;
+  };
+  std::unordered_map<uint64_t, Cell> cells_;
   ScanCells visited_;
 };
 
@@ -93,14 +99,20 @@ class FreeSpaceHistory {
    *  of the sensor. */
   void addScan(const WorldScan& scan, double t);
   /** The cell was seen free for at least `min_free` seconds, ending at most
-   *  `window` seconds before `now`. */
-  bool recentlyFree(double x, double y, double now, double window, double min_free) const;
+   *  `window` seconds before `now`, and was not hit during the
+   *  `static_memory` seconds before that stretch began. */
+  bool recentlyFree(double x, double y, double now, double window, double min_free,
+                    double static_memory = 0) const;
   /** Something moved into open space: the cell and at least 7 of its 8
-   *  neighbours were recently free. (The edge cell of a static obstacle
-   *  can look free to grazing rays while its neighbours are the obstacle's
-   *  own cells, never seen free.) */
-  bool movedIn(double x, double y, double now, double window, double min_free) const;
-  void prune(double now, double keep);
+   *  neighbours were recently free (as above). (The edge cell of a static
+   *  obstacle can look free to grazing rays while its neighbours are the
+   *  obstacle's own cells, never seen free; a thin post's cells are all
+   *  grazed from some side, but they were hit before.) */
+  bool movedIn(double x, double y, double now, double window, double min_free,
+               double static_memory = 0) const;
+  /** Drops cells neither seen free for `keep` seconds nor hit for
+   *  `keep_hits` seconds. */
+  void prune(double now, double keep, double keep_hits = 0);
   size_t size() const { return cells_.size(); }
 
  private:
@@ -108,8 +120,9 @@ class FreeSpaceHistory {
   double res_, radius_;
   ScanCells visited_;
   struct Stretch {
-    double first = 0, last = 0;
-    double hit = -1e300;
+    double first = -1e300, last = -1e300;  ///< the latest stretch of being seen free
+    double hit = -1e300;                   ///< last hit
+    double hit_before = -1e300;            ///< last hit before the stretch began
   };
   std::unordered_map<uint64_t, Stretch> cells_;
 };
@@ -185,16 +198,44 @@ class LocalCostmap {
   TPoint2D origin() const { return {x0_, y0_}; }
   int size() const { return n_; }
 
+  /** m, from the footprint's outline at the pose to the nearest obstacle
+   *  (as check's clearance, uncapped), negative when an obstacle point lies
+   *  inside the footprint; 0 on a static map's or a moving obstacle's cell
+   *  under the outline. Continuous in the pose near point obstacles: the
+   *  supervisor tells a move away from a post from one towards it. */
+  double outlineClearance(const TPose2D& pose) const;
+  /** What one sample (world point wx, wy) of the outline of the footprint
+   *  at `pose` (its heading's cosine and sine c, s) says: true for contact
+   *  (the nearest obstacle within the padding of the outline, or inside
+   *  it), else `clearance` lowered to what it sees. check() asks this of
+   *  every sample near enough to an obstacle to matter. */
+  bool sampleContact(double wx, double wy, const TPose2D& pose, double c, double s,
+                     double& clearance) const;
+  /** The same for a sample inside the footprint: an obstacle in its cell
+   *  lies inside the footprint (or touches its outline). */
+  bool interiorContact(double wx, double wy, const TPose2D& pose, double c, double s) const;
+
  private:
   int cellX(double x) const;
   int cellY(double y) const;
-  double res_, far_, decay_, contact_;
+  /** m, from the outline of the footprint at (x, y, cos, sin) to the
+   *  obstacle nearest to the world point (wx, wy) (a sample of the
+   *  outline): the exact point for sensed obstacles, the cell's square for
+   *  a static map's; negative inside the footprint; infinity when none is
+   *  within `reach` cells. */
+  double outlineDistanceNear(double wx, double wy, const TPose2D& pose, double c, double s,
+                             int reach) const;
+  /** The outline distance of one world point (robot frame via c, s). */
+  double outlineDistanceOf(double wx, double wy, const TPose2D& pose, double c, double s) const;
+  double res_, far_, decay_, contact_, padding_;
   int n_ = 0;
-  double x0_ = 0, y0_ = 0;   // world coordinates of cell (0, 0)'s lower-left corner
-  std::vector<float> dist_;  // metres
+  double x0_ = 0, y0_ = 0;      // world coordinates of cell (0, 0)'s lower-left corner
+  std::vector<float> dist_;     // metres, to any obstacle (moving ones grown)
+  std::vector<float> mdist_;    // metres, to the grown moving obstacles only
+  std::vector<uint8_t> occ_;    // 1: a sensed point in the cell, 2: a static map's cell
+  std::vector<float> px_, py_;  // the sensed point of a cell (occ_ 1)
   size_t obstacle_cells_ = 0, moving_cells_ = 0;
   Footprint fp_;
 };
-
 
 }  // namespace carenav::navigation

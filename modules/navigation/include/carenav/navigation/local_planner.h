@@ -55,11 +55,19 @@ struct Trajectory {
 Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& cmd, double horizon,
                    double step, double clearance_cap, double check_distance = 0);
 
+/** s of `cmd` that cover `margin` metres: of path when it moves; of a
+ *  corner's travel (the turn times `sweep_radius`, the footprint's
+ *  circumscribed radius) when it turns on the spot; 0 for a turn without a
+ *  radius given. */
+double marginTime(const Twist& cmd, double margin, double sweep_radius = 0);
+
 /** True when, braking at the robot's limits along the same arc from `cmd`,
- *  the robot stops at least `margin` metres (of path) before the first
- *  contact `time_to_collision` seconds ahead at that command ([Rosa17]
- *  Eq. 4.1 with proportional braking of v and w). */
-bool canBrake(const Twist& cmd, double time_to_collision, const RobotParams& robot, double margin);
+ *  the robot stops at least `margin` metres (of path; of a corner's travel
+ *  on the spot, with `sweep_radius`: marginTime) before the first contact
+ *  `time_to_collision` seconds ahead at that command ([Rosa17] Eq. 4.1 with
+ *  proportional braking of v and w). */
+bool canBrake(const Twist& cmd, double time_to_collision, const RobotParams& robot, double margin,
+              double sweep_radius = 0);
 
 /** What a planner gets each cycle. Poses are in the cost map's frame. */
 struct PlannerInput {

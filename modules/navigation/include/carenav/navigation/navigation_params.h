@@ -90,8 +90,14 @@ struct PeopleParams {
   double predict_time = 1.0;      ///< s, look-ahead of that growth (inflation = speed x time)
   double dynamic_window = 1.5;    ///< s, a cell seen free this recently and now occupied is moving
   double dynamic_min_free = 0.3;  ///< s, ... after being seen free for at least this long
-  double predict_horizon = 2.0;   ///< s, tracked moving obstacles are swept along their velocity
-                                  ///< this far (0: no tracking)
+  /** s, a cell hit less than this before its latest stretch of being seen
+   *  free began is the edge of something static (rays graze a thin post's
+   *  edge cells from one side and hit them from another), not moved in.
+   *  0 (off) by default: at 2-10 s a person crossing the robot's way is no
+   *  longer seen moving (docs/BENCHMARKS.md, "Navigation in clutter"). */
+  double static_memory = 0.0;
+  double predict_horizon = 2.0;  ///< s, tracked moving obstacles are swept along their velocity
+                                 ///< this far (0: no tracking)
   double route_predict_horizon = 8.0;  ///< s, the route avoids a tracked person's lane this far
   double track_radius = 8.0;           ///< m, moving obstacles are told apart from walls this far
   double track_depth_range = 3.0;      ///< m, depth-camera cells farther away never count as moving
