@@ -149,13 +149,18 @@ TEST(CliNavigate, PeopleAndTheDoorwayWithoutACollision) {
     EXPECT_EQ(jsonReal(run.json, "collisions"), 0.0) << scenario;
   }
   // Without tracking (and so without remembering hidden people) the walker
-  // meets the person; cutting the corner to the door wedges the robot.
+  // meets the person.
   NavRun off = navigate("walker-person-crossing.yaml", {"--set", "navigation.predict_horizon=0"});
   ASSERT_EQ(off.r.code, 0) << off.r.err;
   EXPECT_GT(jsonReal(off.json, "collisions").value_or(0), 0.0) << off.json;
+  // Cutting the corner to the door (no approach on its axis) brings the
+  // robot's corner to the jamb. With contact tested on 5 cm cells that
+  // wedged it (a post sharing a cell with the outline stopped every move);
+  // measured to the sensed points it slides past and reaches the goal.
   off = navigate("goal-doorway.yaml", {"--plugin", "goal-dwa", "--set", "navigation.corner_deg=0"});
   ASSERT_EQ(off.r.code, 0) << off.r.err;
-  EXPECT_FALSE(jsonTrue(off.json, "success")) << off.json;
+  EXPECT_TRUE(jsonTrue(off.json, "success")) << off.json;
+  EXPECT_EQ(jsonReal(off.json, "collisions"), 0.0) << off.json;
 }
 
 // The mrpt-ptg plugin (MRPT's TP-space reactive navigation) on the same
