@@ -13,6 +13,8 @@ void addImportCarmen(CLI::App& import_cmd, const GlobalOptions& g) {
   struct Args {
     io::CarmenImportOptions opt;
     std::string odometry = "auto";
+    int64_t noise_seed = -1;
+    std::vector<double> noise_model{0.05, 1.0, 0.02};
     bool no_tum = false;
     bool json = false;
     bool quiet = false;
@@ -39,6 +41,19 @@ void addImportCarmen(CLI::App& import_cmd, const GlobalOptions& g) {
                   "per scan at its time), odom (ODOM lines), none")
       ->check(CLI::IsMember({"auto", "laser", "odom", "none"}))
       ->capture_default_str();
+  auto* noise = cmd->add_option(
+      "--odometry-noise", a->noise_seed,
+      "Replace the odometry by noisy odometry made from it, with this seed (same seed, same "
+      "noise). For a corrected log, whose odometry fields are the reference poses, this is the "
+      "odometry a real base would have given. Each increment between readings: length x (1 + "
+      "5 % N), turn + N x sqrt((1 deg/m x length)^2 + (2 % x turn)^2); see --odometry-noise-model");
+  noise->check(CLI::Range(int64_t{0}, int64_t{1} << 62));
+  cmd->add_option("--odometry-noise-model", a->noise_model,
+                  "Noise model of --odometry-noise: DIST_FRAC,DEG_PER_M,TURN_FRAC")
+      ->delimiter(',')
+      ->expected(3)
+      ->needs(noise)
+      ->capture_default_str();
   cmd->add_option("--max-range", a->opt.max_range,
                   "Maximum range in m for every scan; readings at or beyond it are invalid "
                   "(default 0: from the log, else 80 m)")
@@ -52,12 +67,21 @@ void addImportCarmen(CLI::App& import_cmd, const GlobalOptions& g) {
       "Example:\n"
       "  carenav import carmen intel-corrected.log.gz --out intel.rawlog\n"
       "  carenav rawlog info intel.rawlog\n"
+      "  carenav import carmen intel-corrected.log.gz --out intel-odo1.rawlog --odometry-noise 1\n"
       "See docs/import.md.");
   cmd->callback([a, &g] {
     prepareOutputFile(a->opt.output);
     if (!a->opt.tum.empty()) prepareOutputFile(a->opt.tum, "--tum");
     const bool quiet = g.quiet || a->quiet;
     a->opt.odometry = io::parseCarmenOdometry(a->odometry);
+    if (a->noise_seed >= 0) {
+      io::OdometryNoiseParams n;
+      n.seed = static_cast<uint64_t>(a->noise_seed);
+      n.dist_frac = a->noise_model[0];
+      n.deg_per_m = a->noise_model[1];
+      n.turn_frac = a->noise_model[2];
+      a->opt.odometry_noise = n;
+    }
     a->opt.write_tum = !a->no_tum;
     a->opt.progress = !quiet;
     auto report = [&](const io::CarmenImportStats& st) {

@@ -449,7 +449,13 @@ std::string CarmenImportStats::toText() const {
     o << "skipped:      " << n << " line(s) with a negative ipc_timestamp ("
       << joinCounts(negative_time) << ")\n";
   }
-  o << "odometry:     " << odometry << " (source: " << toString(odometry_source) << ")\n";
+  o << "odometry:     " << odometry << " (source: " << toString(odometry_source);
+  if (odometry_noise)
+    o << "; noise seed " << odometry_noise->seed << ": "
+      << fmtNumber(100 * odometry_noise->dist_frac, 3) << " % of distance, "
+      << fmtNumber(odometry_noise->deg_per_m, 3) << " deg per m, "
+      << fmtNumber(100 * odometry_noise->turn_frac, 3) << " % of turn";
+  o << ")\n";
   if (observations)
     o << "time span:    " << fmtTime(min_time) << " .. " << fmtTime(max_time) << " s ("
       << fmtNumber(max_time - min_time, 1) << " s)\n";
@@ -476,6 +482,14 @@ std::string CarmenImportStats::toJson() const {
   j.key("scans_with_bad_readings").value(scans_with_bad_readings);
   j.key("odometry").value(odometry);
   j.key("odometry_source").value(toString(odometry_source));
+  if (odometry_noise) {
+    j.key("odometry_noise").beginObject();
+    j.key("seed").value(odometry_noise->seed);
+    j.key("dist_frac").value(odometry_noise->dist_frac);
+    j.key("deg_per_m").value(odometry_noise->deg_per_m);
+    j.key("turn_frac").value(odometry_noise->turn_frac);
+    j.endObject();
+  }
   j.key("observations").value(observations);
   j.key("first_time").value(first_time);
   j.key("last_time").value(last_time);
@@ -538,6 +552,13 @@ void checkOptions(const CarmenImportOptions& opt) {
     throw InputError("max range must be a finite number >= 0 (0: from the log)");
   if (opt.compression < 1 || opt.compression > 9)
     throw InputError("compression level must be 1..9");
+  if (opt.odometry_noise) {
+    const auto& n = *opt.odometry_noise;
+    if (opt.odometry == CarmenOdometry::None)
+      throw InputError("odometry noise needs an odometry source (not --odometry none)");
+    for (double v : {n.dist_frac, n.deg_per_m, n.turn_frac})
+      if (!(v >= 0 && v <= 10)) throw InputError("odometry noise model values must be in [0, 10]");
+  }
 }
 
 void checkOutputNotInput(const CarmenImportOptions& opt) {
@@ -586,6 +607,7 @@ class CarmenConverter {
         progress_("carmen " + opt.input, src.fileSize(), false),
         laser_odom_(st.odometry_source == CarmenOdometry::Laser),
         odom_lines_(st.odometry_source == CarmenOdometry::Odom) {
+    if (opt.odometry_noise) noise_.emplace(*opt.odometry_noise);
     if (!out_.open(tmp_, opt.compression))
       throw InputError(opt.output + ": cannot write the rawlog (does the directory exist?)");
     if (!opt.progress) progress_.setEnabled(false);
@@ -844,7 +866,7 @@ class CarmenConverter {
     mrpt::obs::CObservationOdometry o;
     o.sensorLabel = "ODOMETRY";
     o.timestamp = stamp;
-    o.odometry = pose;
+    o.odometry = noise_ ? noise_->next(pose) : pose;
     if (vel) {
       o.hasVelocities = true;
       o.velocityLocal = mrpt::math::TTwist2D(vel->first, 0, vel->second);
@@ -918,6 +940,7 @@ class CarmenConverter {
   mrpt::io::CFileGZOutputStream out_;
   Progress progress_;
   const bool laser_odom_, odom_lines_;
+  std::optional<NoisyOdometry> noise_;  // --odometry-noise
   Trajectory2D traj_;
   LogParams par_;
   bool have_prev_scan_ = false;
@@ -974,6 +997,7 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
   CarmenImportStats st;
   st.odometry_source =
       opt.odometry == CarmenOdometry::Auto ? chooseOdometry(opt.input) : opt.odometry;
+  if (st.odometry_source != CarmenOdometry::None) st.odometry_noise = opt.odometry_noise;
   const std::string tum_path = tumPathOf(opt);
   if (!tum_path.empty()) checkTumPath(opt, tum_path);
 

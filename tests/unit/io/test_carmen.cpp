@@ -631,3 +631,73 @@ void checkRealLog(const std::string& name, size_t expected_scans, size_t beams) 
 TEST(CarmenReal, IntelCorrected) { checkRealLog("intel-corrected.log.gz", 910, 180); }
 
 TEST(CarmenReal, CsailCorrected) { checkRealLog("csail-corrected.log.gz", 406, 361); }
+
+namespace {
+/** The odometry poses of the Intel log imported with noise `seed` (none: -1). */
+std::vector<mrpt::poses::CPose2D> intelOdometry(int seed, CarmenImportStats* stats = nullptr) {
+  CarmenImportOptions o;
+  o.input = kTestData + "/carmen/intel-corrected.log.gz";
+  o.output = (scratch() / ("intel_noise" + std::to_string(seed) + ".rawlog")).string();
+  o.write_tum = false;
+  if (seed >= 0) {
+    OdometryNoiseParams n;
+    n.seed = static_cast<uint64_t>(seed);
+    o.odometry_noise = n;
+  }
+  const CarmenImportStats st = importCarmen(o);
+  if (stats) *stats = st;
+  std::vector<mrpt::poses::CPose2D> out;
+  for (const auto& obs : readBack(o.output))
+    if (auto odo = std::dynamic_pointer_cast<CObservationOdometry>(obs))
+      out.push_back(odo->odometry);
+  return out;
+}
+}  // namespace
+
+TEST(Carmen, OdometryNoiseIsSeededAndFollowsItsModel) {
+  CarmenImportStats st;
+  const auto clean = intelOdometry(-1);
+  const auto a = intelOdometry(1, &st);
+  const auto again = intelOdometry(1);
+  const auto b = intelOdometry(2);
+  ASSERT_EQ(a.size(), clean.size());
+  ASSERT_GT(a.size(), 900u);
+  ASSERT_TRUE(st.odometry_noise.has_value());
+  EXPECT_NE(st.toText().find("noise seed 1"), std::string::npos);
+  EXPECT_NE(st.toJson().find("\"odometry_noise\""), std::string::npos);
+  // Same seed, same noise; another seed, other noise; the first pose is the origin.
+  for (size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], again[i]) << i;
+  EXPECT_EQ(a[0], clean[0]);
+  EXPECT_GT((a.back() - b.back()).norm(), 0.05);
+  // Each step's length error over the log: about 5 % of the step (its std
+  // dev), unbiased; heading errors about 1 deg per m and 2 % of the turn.
+  double sum = 0, sum2 = 0, heading2 = 0, model2 = 0;
+  size_t n = 0;
+  for (size_t i = 1; i < a.size(); ++i) {
+    const auto ref = clean[i] - clean[i - 1], noisy = a[i] - a[i - 1];
+    const double d = ref.norm();
+    if (d < 0.05) continue;
+    const double rel = noisy.norm() / d - 1;
+    sum += rel, sum2 += rel * rel, ++n;
+    const double dh = std::remainder(noisy.phi() - ref.phi(), 2 * M_PI);
+    heading2 += dh * dh;
+    model2 += std::pow(1.0 * kDeg * d, 2) + std::pow(0.02 * ref.phi(), 2);
+  }
+  ASSERT_GT(n, 500u);
+  EXPECT_NEAR(sum / n, 0.0, 0.01);
+  EXPECT_NEAR(std::sqrt(sum2 / n), 0.05, 0.008);
+  EXPECT_NEAR(std::sqrt(heading2 / model2), 1.0, 0.15);
+}
+
+TEST(Carmen, OdometryNoiseNeedsOdometry) {
+  CarmenImportOptions o;
+  o.input = kTestData + "/carmen/intel-corrected.log.gz";
+  o.output = (scratch() / "noise_none.rawlog").string();
+  o.odometry = CarmenOdometry::None;
+  o.odometry_noise = OdometryNoiseParams{};
+  EXPECT_THROW(importCarmen(o), InputError);
+  EXPECT_FALSE(fs::exists(o.output));
+  o.odometry = CarmenOdometry::Auto;
+  o.odometry_noise->dist_frac = -1;
+  EXPECT_THROW(importCarmen(o), InputError);
+}

@@ -16,9 +16,11 @@
 #pragma once
 
 #include <carenav/common/errors.h>
+#include <carenav/io/odometry_noise.h>
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 
 namespace carenav::io {
@@ -56,6 +58,10 @@ struct CarmenImportOptions {
   /** No TUM file at all. */
   bool write_tum = true;
   CarmenOdometry odometry = CarmenOdometry::Auto;
+  /** Replace the odometry readings by noisy ones made from them (for a
+   *  corrected log, whose odometry fields are the reference poses: the
+   *  odometry a real base would have given). None: readings as logged. */
+  std::optional<OdometryNoiseParams> odometry_noise;
   /** m. Readings at or beyond it are invalid. 0: from the log (the
    *  maximum_range field; PARAM robot_front_laser_max / robot_rear_laser_max
    *  for FLASER/RLASER), else 80 m, CARMEN's own default for old messages. */
@@ -78,6 +84,8 @@ struct CarmenImportStats {
   uint64_t bad_readings = 0, scans_with_bad_readings = 0, first_bad_reading_line = 0;
   uint64_t odometry = 0;                                  ///< CObservationOdometry written
   CarmenOdometry odometry_source = CarmenOdometry::None;  ///< the source used (never Auto)
+  /** The noise added to the odometry (CarmenImportOptions::odometry_noise). */
+  std::optional<OdometryNoiseParams> odometry_noise;
   std::map<std::string, uint64_t> unknown;                ///< unknown message types, skipped
   /** Known messages left out by the chosen odometry source: ODOM lines when
    *  it is Laser or None. */
