@@ -4,8 +4,10 @@
 // The map is rebuilt from the optimised keyframes, so the loop closes in the
 // map as well as in the trajectory; MRPT's icp-slam cannot do that.
 #include <carenav/slam/correlative_matcher.h>
+#include <carenav/slam/line_icp.h>
 #include <carenav/slam/loop_consistency.h>
 #include <carenav/slam/mapper.h>
+#include <carenav/slam/motion_prior.h>
 #include <carenav/slam/robust_graph.h>
 
 #include <mrpt/graphslam/levmarq.h>
@@ -39,6 +41,9 @@ constexpr size_t kLoopTries = 3;         // nearest candidates tried per keyfram
 // front end's right matches agree 0.82 and more, a few right after a failure
 // less, and those are not wide-search matches).
 constexpr double kWideMinAgreement = 0.8;
+// Squared Mahalanobis distance (3 dof) beyond which a scan match and the
+// odometry's prediction disagree: the chi-square 99.9 % quantile.
+constexpr double kPriorGate = 16.27;
 
 struct Keyframe {
   CPose2D pose;  // current estimate, world frame
@@ -161,8 +166,8 @@ class GraphMapper : public Mapper {
     current_scan_ = scan;
 
     if (step.odometry && step.index > 0) have_odometry_ = true;
-    const CPose2D guess =
-        (cfg_.slam.use_odometry && step.odometry) ? *step.odometry : last_increment_;
+    const bool with_odometry = cfg_.slam.use_odometry && step.odometry.has_value();
+    const CPose2D guess = with_odometry ? *step.odometry : last_increment_;
     const CPose2D before = pose_;
     bool matched = false;
     if (keyframes_.empty()) {
@@ -170,32 +175,9 @@ class GraphMapper : public Mapper {
     } else if (local->size() < 10) {
       pose_ = pose_ + guess;  // nothing to match: dead reckoning
     } else {
-      const bool have_odometry = cfg_.slam.use_odometry && step.odometry.has_value();
-      const Match m = matchToSubmap(pose_ + guess, !have_odometry);
-      if (m.goodness >= cfg_.slam.min_icp_goodness) {
-        pose_ = m.pose;
-        last_cov_ = m.cov;
-        matched = true;
-        ++stats_.icp_accepted;
-        lost_ = 0;
-      } else {
-        // Without odometry a failed match must not extrapolate the last
-        // motion (a runaway spin): assume the robot stood still, unless the
-        // match is weak rather than wrong (at least half the goodness asked
-        // for: a scan that sees mostly what the submap lacks). Then its pose
-        // is kept, as the best guess there is (a robot turning 30 deg per
-        // scan is lost for good if it is held still), but linked to the graph
-        // only loosely (not `matched`).
-        if (have_odometry)
-          pose_ = pose_ + guess;
-        else if (m.goodness >= 0.5 * cfg_.slam.min_icp_goodness)
-          pose_ = m.pose;
-        ++stats_.icp_rejected;
-        if (!have_odometry) ++lost_;
-      }
+      matched = with_odometry ? stepWithOdometry(guess) : stepLaserOnly(guess);
     }
     if (!keyframes_.empty()) last_increment_ = pose_ - before;
-
     if (needKeyframe()) addKeyframe(scan, local, matched);
     const size_t k = keyframes_.size() - 1;
     records_.push_back({step.time, k, pose_ - keyframes_[k].pose});
@@ -243,6 +225,7 @@ class GraphMapper : public Mapper {
     CPose2D pose;
     double goodness = 0;
     mrpt::math::CMatrixDouble33 cov;
+    bool consistent = true;  ///< within the motion prior's gate
   };
 
   /** ICP of the current scan against the submap from `predicted`. Without
@@ -298,6 +281,63 @@ class GraphMapper : public Mapper {
         }
     }
     return best;
+  }
+
+  /** With odometry: ICP from the odometry's prediction, weighed against it.
+   *  A match the prior's uncertainty explains (squared Mahalanobis distance
+   *  of the two within kPriorGate) is fused with it (information form): a
+   *  match that slides along a corridor is held by odometry along it. A match
+   *  farther off is a wrong basin (a look-alike doorway, an open hall with
+   *  few returns): the step is dead-reckoned (goodness 0). */
+  Match matchWithPrior(const CPose2D& inc) {
+    const CPose2D predicted = pose_ + inc;
+    const PoseGaussian prior(predicted, toWorld(incrementCovariance(inc, motion_), pose_));
+    const LineIcp::Result r = line_icp_.align(*current_points_, predicted, &prior);
+    Match m;
+    m.pose = r.pose;
+    m.cov = r.cov;
+    m.goodness = r.inliers;
+    m.consistent = mahalanobis2(m.pose, predicted, prior.cov) <= kPriorGate;
+    return m;
+  }
+
+  /** One step with odometry: the posterior's mode (matchWithPrior), or dead
+   *  reckoning when scan and odometry disagree. Returns whether matched. */
+  bool stepWithOdometry(const CPose2D& inc) {
+    const Match m = matchWithPrior(inc);
+    if (!m.consistent) {
+      pose_ = pose_ + inc;
+      ++stats_.prior_rejected;
+      ++stats_.icp_rejected;
+      return false;
+    }
+    pose_ = m.pose;
+    last_cov_ = m.cov;
+    ++stats_.icp_accepted;
+    return true;
+  }
+
+  /** One step without odometry: the wide search of matchToSubmap from the
+   *  constant-velocity prediction. Returns whether matched. */
+  bool stepLaserOnly(const CPose2D& guess) {
+    const Match m = matchToSubmap(pose_ + guess, true);
+    if (m.goodness >= cfg_.slam.min_icp_goodness) {
+      pose_ = m.pose;
+      last_cov_ = m.cov;
+      ++stats_.icp_accepted;
+      lost_ = 0;
+      return true;
+    }
+    // A failed match must not extrapolate the last motion (a runaway spin):
+    // assume the robot stood still, unless the match is weak rather than
+    // wrong (at least half the goodness asked for: a scan that sees mostly
+    // what the submap lacks). Then its pose is kept, as the best guess there
+    // is (a robot turning 30 deg per scan is lost for good if it is held
+    // still), but linked to the graph only loosely (not matched).
+    if (m.goodness >= 0.5 * cfg_.slam.min_icp_goodness) pose_ = m.pose;
+    ++stats_.icp_rejected;
+    ++lost_;
+    return false;
   }
 
   /** Visibility agreement (scanVisibility) of the current scan placed at
@@ -408,8 +448,14 @@ class GraphMapper : public Mapper {
       const CPose2D guess = keyframes_[k].pose - keyframes_[j].pose;
       mrpt::slam::CICP::TReturnInfo info;
       auto pdf = loop_icp.Align(&ref, keyframes_[k].points.get(), guess, info);
-      const CPose2D rel = pdf->getMeanVal();
+      CPose2D rel = pdf->getMeanVal();
       if (info.goodness < s.min_icp_goodness) continue;
+      // Point-to-point ICP found the basin from the drifted guess; point to
+      // line pins it down without the pull along walls sampled differently.
+      LineIcp line{LineIcp::Parameters{}};
+      line.setReference(ref);
+      const LineIcp::Result refined = line.align(*keyframes_[k].points, rel);
+      if ((refined.pose - rel).norm() < 0.2 && refined.inliers >= 0.3) rel = refined.pose;
       if ((rel - guess).norm() > s.loop_max_correction) continue;
       // ICP's goodness counts the scan's points that found a partner; a
       // keyframe seen again from another heading shares only part of its view
@@ -656,6 +702,7 @@ class GraphMapper : public Mapper {
       submap_.insertAnotherMap(&p, mrpt::poses::CPose3D());
     }
     if (!cfg_.slam.use_odometry || !have_odometry_) correlative_.setReference(submap_);
+    if (cfg_.slam.use_odometry) line_icp_.setReference(submap_);
   }
 
   void resume(const mrpt::maps::CSimpleMap& map) {
@@ -695,6 +742,9 @@ class GraphMapper : public Mapper {
   size_t next_candidate_id_ = 0;
   std::map<std::pair<size_t, size_t>, bool> consistent_;  // by candidate ids
   CorrelativeMatcher correlative_{CorrelativeMatcher::Parameters{}};
+  LineIcp line_icp_{LineIcp::Parameters{}};
+  MotionNoise motion_{cfg_.slam.odom_dist_frac, cfg_.slam.odom_deg_per_m, cfg_.slam.odom_turn_frac,
+                      cfg_.slam.odom_min_xy, cfg_.slam.odom_min_deg};
   bool have_odometry_ = false;  // the log has shown odometry
   size_t lost_ = 0;             // laser only: scan matches failed in a row
   CPose2D pose_, last_increment_;

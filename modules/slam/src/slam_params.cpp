@@ -70,7 +70,22 @@ const ParamTable<SlamParams>& SlamParams::table() {
           .real("loop_robust_phi", &SlamParams::loop_robust_phi, "", 0.001, 1000,
                 "icp-graph: dynamic covariance scaling's Phi: a loop closure whose squared "
                 "Mahalanobis residual chi2 exceeds it keeps the share (2 Phi / (Phi + chi2))^2 "
-                "of its information");
+                "of its information")
+          .real("odom_dist_frac", &SlamParams::odom_dist_frac, "", 0, 10,
+                "icp-graph with odometry: standard deviation of the position of one odometry "
+                "step, as a share of its length (the motion prior the scan match is weighed "
+                "against; a prior too tight rejects right matches, one too loose lets a "
+                "match slide along a corridor)")
+          .real("odom_deg_per_m", &SlamParams::odom_deg_per_m, "deg", 0, 90,
+                "icp-graph with odometry: standard deviation of the heading of one odometry "
+                "step per metre driven")
+          .real("odom_turn_frac", &SlamParams::odom_turn_frac, "", 0, 10,
+                "icp-graph with odometry: standard deviation of the heading of one odometry "
+                "step, as a share of its turn")
+          .real("odom_min_xy", &SlamParams::odom_min_xy, "m", 0.001, 10,
+                "icp-graph with odometry: smallest position standard deviation of a step")
+          .real("odom_min_deg", &SlamParams::odom_min_deg, "deg", 0.01, 90,
+                "icp-graph with odometry: smallest heading standard deviation of a step");
   return t;
 }
 

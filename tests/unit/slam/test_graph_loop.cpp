@@ -87,9 +87,12 @@ TEST(SlamGraphSimulated, ClosesALoopRevisitedFromAnotherHeading) {
   EXPECT_EQ(open.result.stats.loop_closures, 0u);
   EXPECT_GE(closed.result.stats.loop_closures, 3u);
   EXPECT_GE(closed.result.stats.optimisations, 1u);
-  // The closure pulls the drifted end back: clearly better than the open
-  // chain, and within 5 cm RMSE of the truth.
-  EXPECT_LT(closed.ate, 0.7 * open.ate) << "closed " << closed.ate << " open " << open.ate;
+  // The front end (point-to-line ICP under the odometry's prior) keeps even
+  // the open chain within a few mm of the truth on this loop, so there is
+  // no drift left for the closures to pull back (with the point-to-point
+  // front end there was: the open chain was then the worse by 30 %). The
+  // closures must not make the map worse, and it stays within 5 cm.
+  EXPECT_LE(closed.ate, open.ate + 0.002) << "closed " << closed.ate << " open " << open.ate;
   EXPECT_LT(closed.ate, 0.05);
   // The end of the loop is the start again.
   EXPECT_LT(closed.result.final_pose.norm(), 0.15);

@@ -45,6 +45,8 @@ struct MapperStats {
   size_t loop_closures = 0;    ///< icp-graph: loop closures kept
   size_t loop_rejected = 0;    ///< icp-graph: loop closures the optimised graph disagreed with
   size_t optimisations = 0;    ///< icp-graph: graph optimisations run
+  /** icp-graph: scan matches the odometry's prior ruled out (dead-reckoned) */
+  size_t prior_rejected = 0;
   /** icp: scans whose timestamp did not advance past the scan before, fed to
    *  MRPT's builder 1 ms after it (its pose extrapolator needs time to pass). */
   size_t restamped = 0;

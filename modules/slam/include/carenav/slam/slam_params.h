@@ -40,6 +40,12 @@ struct SlamParams {
   double loop_consistency_gate = 11.34;  ///< chi2 (3 dof) of two consistent closures' cycle
   bool loop_robust = false;              ///< dynamic covariance scaling of loop edges
   double loop_robust_phi = 1.0;          ///< DCS Phi: chi2 above it scales a closure down
+  // icp-graph with odometry: the motion prior (MotionNoise, motion_prior.h)
+  double odom_dist_frac = 0.10;  ///< position std dev, share of the distance driven
+  double odom_deg_per_m = 2.0;   ///< deg, heading std dev per m driven
+  double odom_turn_frac = 0.05;  ///< heading std dev, share of the turn
+  double odom_min_xy = 0.03;     ///< m, floor of the position std dev
+  double odom_min_deg = 1.0;     ///< deg, floor of the heading std dev
   static const ParamTable<SlamParams>& table();
 };
 
