@@ -11,6 +11,7 @@
 #include <carenav/sim/world.h>
 
 #include "msg_convert.h"
+#include "node_common.h"
 
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
@@ -27,7 +28,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 namespace carenav::ros {
 
@@ -160,29 +160,9 @@ void NavigateNode::onOtherScan(const SensorParams& sp, const sensor_msgs::LaserS
 // pose places it) as a depth observation for perception.
 void NavigateNode::onPoints(const SensorParams& sp, const sensor_msgs::PointCloud2& m) {
   if (!have_odom_) return;
-  int off[3] = {-1, -1, -1};
-  for (const auto& f : m.fields)
-    for (int i = 0; i < 3; ++i)
-      if (f.name == std::string(1, "xyz"[i]) && f.datatype == sensor_msgs::PointField::FLOAT32)
-        off[i] = static_cast<int>(f.offset);
-  if (off[0] < 0 || off[1] < 0 || off[2] < 0 || m.point_step < 12) return;
-  auto o = mrpt::obs::CObservation3DRangeScan::Create();
-  o->sensorLabel = sp.label;
-  o->timestamp = fromRosTime(m.header.stamp);
-  o->sensorPose = mrpt::poses::CPose3D(sp.x, sp.y, sp.z, mrpt::DEG2RAD(sp.yaw),
-                                       mrpt::DEG2RAD(sp.pitch), mrpt::DEG2RAD(sp.roll));
-  o->hasPoints3D = true;
-  const size_t n = size_t{m.width} * m.height;
-  if (m.data.size() < n * m.point_step) return;
-  for (size_t i = 0; i < n; ++i) {
-    float v[3];
-    for (int k = 0; k < 3; ++k) std::memcpy(&v[k], &m.data[i * m.point_step + off[k]], 4);
-    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) continue;
-    o->points3D_x.push_back(v[0]);
-    o->points3D_y.push_back(v[1]);
-    o->points3D_z.push_back(v[2]);
-  }
-  s_.observation(o, odom_pose_, t(m.header.stamp));
+  const mrpt::poses::CPose3D pose(sp.x, sp.y, sp.z, mrpt::DEG2RAD(sp.yaw), mrpt::DEG2RAD(sp.pitch),
+                                  mrpt::DEG2RAD(sp.roll));
+  if (auto o = cloudFromRos(m, sp.label, pose)) s_.observation(o, odom_pose_, t(m.header.stamp));
 }
 
 void NavigateNode::onOdom(const nav_msgs::Odometry& m) {
@@ -314,12 +294,7 @@ std::string NavigateNode::run() {
 }  // namespace
 
 navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o) {
-  auto setup = navigation::sessionSetup(o.profile, o.sets, o.plugin);  // bad input: before ROS
-  initRosNode("carenav_navigate", o.ros_args);
-  if (auto sets = privateParamOverrides(); !sets.empty()) {
-    sets.insert(sets.end(), o.sets.begin(), o.sets.end());
-    setup = navigation::sessionSetup(o.profile, sets, o.plugin);
-  }
+  auto setup = startNode("carenav_navigate", o.profile, o.sets, o.plugin, o.ros_args);
   std::optional<mrpt::maps::COccupancyGridMap2D> grid;
   if (!o.map.empty() || !o.world.empty()) grid = loadMap(o);
   setup.name = "ros";

@@ -1,6 +1,9 @@
 #include <carenav/common/errors.h>
 #include <carenav/ros/nodes.h>
 
+#include "node_common.h"
+
+#include <ros/callback_queue.h>
 #include <ros/master.h>
 #include <ros/ros.h>
 
@@ -90,6 +93,26 @@ std::vector<std::string> privateParamOverrides() {
     out.push_back(set);
   }
   return out;
+}
+
+navigation::SessionSetup startNode(const std::string& node, const std::string& profile,
+                                   const std::vector<std::string>& sets, const std::string& plugin,
+                                   const std::vector<std::string>& ros_args) {
+  auto setup = navigation::sessionSetup(profile, sets, plugin);
+  initRosNode(node, ros_args);
+  if (auto params = privateParamOverrides(); !params.empty()) {
+    params.insert(params.end(), sets.begin(), sets.end());
+    setup = navigation::sessionSetup(profile, params, plugin);
+  }
+  return setup;
+}
+
+void spinNode(double duration, const std::atomic<bool>* stop) {
+  const ::ros::WallTime wall0 = ::ros::WallTime::now();
+  while (::ros::ok() && !(stop && stop->load())) {
+    if (duration > 0 && (::ros::WallTime::now() - wall0).toSec() >= duration) break;
+    ::ros::getGlobalCallbackQueue()->callAvailable(::ros::WallDuration(0.1));
+  }
 }
 
 }  // namespace carenav::ros

@@ -94,6 +94,33 @@ struct LocalizeNodeOptions {
 };
 void runLocalizeNode(const LocalizeNodeOptions& o);
 
+/** `carenav ros perceive`: carenav's perception pipeline (that of `carenav
+ *  perceive` and of the navigation session) on a depth camera's frames.
+ *  Subscribes `points` (sensor_msgs/PointCloud2 in the camera's body frame:
+ *  x forward, y left, z up), `depth/image` + `depth/camera_info`
+ *  (sensor_msgs/Image 16UC1 mm or 32FC1 m, and its CameraInfo) and, to
+ *  move the local grid, `odom`; publishes `local_grid`
+ *  (nav_msgs/OccupancyGrid, the robot-centred grid in the odometry frame)
+ *  and `virtual_scan` (sensor_msgs/LaserScan, 360 degrees in the base frame:
+ *  per bearing the first occupied cell of the grid, so stairs down, gutters
+ *  and outlets are in it as well as obstacles). */
+struct PerceiveNodeOptions {
+  std::string profile;
+  std::vector<std::string> sets;
+  std::string method = "rrt-gpd";  ///< rrt-gpd | ransac | height-band (perception::Method)
+  /** The depth camera ([sensor.LABEL]: its pose on the robot); empty: the
+   *  profile's [perception] sensor, else its first depth camera. */
+  std::string sensor;
+  std::string sensor_pose;  ///< "x,y,z,yaw,pitch,roll" (m, deg) instead of the profile's
+  double duration = 0;      ///< s; 0: until stopped
+  std::string odom_frame = "odom", base_frame = "base_link";
+  std::vector<std::string> ros_args;
+  const std::atomic<bool>* stop = nullptr;
+  bool quiet = false;
+};
+/** Runs until stopped or `duration`; returns the number of frames processed. */
+size_t runPerceiveNode(const PerceiveNodeOptions& o);
+
 /** ros::init with the node's name and ROS arguments (once per process);
  *  throws InputError when the master cannot be reached within `wait_s`. */
 void initRosNode(const std::string& name, const std::vector<std::string>& ros_args,

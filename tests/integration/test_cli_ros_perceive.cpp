@@ -1,0 +1,102 @@
+// `carenav ros perceive` on a real ROS master: the ISR-AIWALKER walker in
+// the simulator (`carenav ros sim`, its Kinect cloud on `points`) facing a
+// staircase going down publishes a virtual scan whose ranges ahead end at
+// the stair edge; facing open floor they are long or empty. Skipped
+// without the ROS part.
+#include "cli_helpers.h"
+
+#ifdef CARENAV_TEST_WITH_ROS
+#include <nav_msgs/OccupancyGrid.h>
+#include <sensor_msgs/LaserScan.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "ros_nodes_helpers.h"
+#endif
+
+namespace {
+
+using namespace carenav_test;
+
+#ifdef CARENAV_TEST_WITH_ROS
+using namespace carenav_ros_test;
+
+const std::string kWalker = kSrc + "/ini/isr-aiwalker.ini";
+const std::string kStairs = kSrc + "/maps/worlds/nav/stairs_down.yaml";
+
+struct Perceived {
+  std::vector<float> ahead;  ///< ranges within 10 degrees of straight ahead
+  size_t scans = 0, occupied = 0;
+  std::string grid_frame;
+};
+
+/** The sim's walker at `start` in the stairs world and `ros perceive` on its
+ *  cloud: what the last virtual scan ahead and the last local grid hold once
+ *  a dozen scans (about a second of frames) have come. */
+Perceived perceiveAt(const fs::path& dir, const std::string& start, const std::string& name) {
+  TopicLog<sensor_msgs::LaserScan> scans("virtual_scan");
+  TopicLog<nav_msgs::OccupancyGrid> grids("local_grid");
+  ::ros::AsyncSpinner spinner(1);
+  spinner.start();
+  const pid_t sim = startRosNode(
+      dir, "sim", {"--profile", kWalker, "--world", kStairs, "--start", start, "--duration", "60"},
+      "sim_" + name);
+  const pid_t per =
+      startRosNode(dir, "perceive", {"--profile", kWalker, "--duration", "50"}, "perceive_" + name);
+  while (scans.count() < 12 && running(per))
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ::kill(per, SIGINT);
+  ::kill(sim, SIGINT);
+  EXPECT_EQ(waitExit(per), 0) << slurp(dir / ("perceive_" + name + ".log"));
+  EXPECT_EQ(waitExit(sim), 0) << slurp(dir / ("sim_" + name + ".log"));
+  spinner.stop();
+  Perceived r;
+  r.scans = scans.count();
+  if (const auto s = scans.last())
+    for (size_t k = 0; k < s->ranges.size(); ++k)
+      if (std::abs(s->angle_min + k * s->angle_increment) < 10 * M_PI / 180)
+        r.ahead.push_back(s->ranges[k]);
+  if (const auto g = grids.last()) {
+    r.grid_frame = g->header.frame_id;
+    r.occupied = std::count_if(g->data.begin(), g->data.end(), [](int8_t v) { return v > 55; });
+  }
+  return r;
+}
+
+float median(std::vector<float> v) {
+  if (v.empty()) return std::nanf("");
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+#define SKIP_WITHOUT_ROS() \
+  if (!haveRosmaster()) GTEST_SKIP() << "no rosmaster (Debian package python3-rosmaster)"
+#else
+#define SKIP_WITHOUT_ROS() GTEST_SKIP() << "built without the ROS part (CARENAV_WITH_ROS=OFF)"
+#endif
+
+TEST(CliRosPerceive, VirtualScanHasTheStairsDownAhead) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  // The stairs begin at x = 6 m: 1.5 m ahead of the walker's axle.
+  const Perceived stairs = perceiveAt(dir, "4.5,2.0,0", "stairs");
+  // Facing west over the landing: the wall is 5 m away, beyond the Kinect's 4.5 m.
+  const Perceived flat = perceiveAt(dir, "5.0,2.0,180", "flat");
+  ASSERT_GE(stairs.scans, 12u);
+  ASSERT_GE(flat.scans, 12u);
+  ASSERT_FALSE(stairs.ahead.empty());
+  const float edge = median(stairs.ahead), open = median(flat.ahead);
+  std::cout << "virtual scan ahead (median of +-10 deg): stairs " << edge << " m, flat floor "
+            << open << " m; occupied cells " << stairs.occupied << " / " << flat.occupied << "\n";
+  EXPECT_GT(edge, 1.0) << "the drop is at 1.5 m, not at the walker";
+  EXPECT_LT(edge, 1.9) << "the stair edge ends the ranges ahead";
+  EXPECT_GT(open, 3.5) << "open floor ahead: long or no ranges";
+  EXPECT_EQ(stairs.grid_frame, "odom") << "the grid follows the sim's odometry";
+  EXPECT_GT(stairs.occupied, flat.occupied);
+#endif
+}
+
+}  // namespace
