@@ -166,6 +166,28 @@ mrpt::obs::CObservation3DRangeScan::Ptr depthFromRos(const sensor_msgs::Image& i
   return o;
 }
 
+nav_msgs::OccupancyGrid gridToRos(const mrpt::maps::COccupancyGridMap2D& g,
+                                  const std::string& frame, const ::ros::Time& stamp) {
+  nav_msgs::OccupancyGrid m;
+  m.header.stamp = stamp;
+  m.header.frame_id = frame;
+  m.info.map_load_time = stamp;
+  m.info.resolution = g.getResolution();
+  m.info.width = static_cast<uint32_t>(g.getSizeX());
+  m.info.height = static_cast<uint32_t>(g.getSizeY());
+  m.info.origin.position.x = g.getXMin();
+  m.info.origin.position.y = g.getYMin();
+  m.info.origin.orientation.w = 1;
+  m.data.resize(size_t{m.info.width} * m.info.height);
+  for (unsigned j = 0; j < m.info.height; ++j)
+    for (unsigned i = 0; i < m.info.width; ++i) {
+      const double occ = 1.0 - g.getCell(i, j);  // MRPT cells: p(free)
+      m.data[size_t{j} * m.info.width + i] =
+          std::abs(occ - 0.5) < 0.01 ? -1 : static_cast<int8_t>(std::lround(100 * occ));
+    }
+  return m;
+}
+
 std::string bareFrame(const std::string& f) { return !f.empty() && f[0] == '/' ? f.substr(1) : f; }
 
 }  // namespace carenav::ros

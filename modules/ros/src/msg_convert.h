@@ -5,9 +5,11 @@
 #include <geometry_msgs/Quaternion.h>
 #include <geometry_msgs/Transform.h>
 #include <mrpt/core/Clock.h>
+#include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/poses/CPose3D.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <ros/time.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
@@ -53,6 +55,11 @@ mrpt::obs::CObservation3DRangeScan::Ptr depthFromRos(const sensor_msgs::Image& i
                                                      const sensor_msgs::CameraInfo& info,
                                                      const std::string& label,
                                                      const mrpt::poses::CPose3D& sensor_pose);
+
+/** An MRPT grid as a ROS map in `frame`: -1 unknown (p = 0.5), else
+ *  100 x p(occupied), rows along y from the grid's lower corner. */
+nav_msgs::OccupancyGrid gridToRos(const mrpt::maps::COccupancyGridMap2D& g,
+                                  const std::string& frame, const ::ros::Time& stamp);
 
 /** "/a/b" -> "a/b": tf frame names compared without a leading slash. */
 std::string bareFrame(const std::string& f);

@@ -83,28 +83,10 @@ void PerceiveNode::frame(mrpt::obs::CObservation3DRangeScan& obs, const ::ros::T
 }
 
 // The robot-centred grid, axis-aligned with the odometry frame (the base
-// frame until odometry arrives): -1 unknown, else 100 x p(occupied).
+// frame until odometry arrives).
 void PerceiveNode::publishGrid(const ::ros::Time& stamp) {
-  const auto& g = pipe_.grid();
-  const int n = g.cells();
-  const double r = g.resolution();
-  nav_msgs::OccupancyGrid m;
-  m.header.stamp = stamp;
-  m.header.frame_id = have_odom_ ? o_.odom_frame : o_.base_frame;
-  m.info.map_load_time = stamp;
-  m.info.resolution = static_cast<float>(r);
-  m.info.width = m.info.height = static_cast<uint32_t>(n);
-  m.info.origin.position.x = g.centreX(0) - r / 2;
-  m.info.origin.position.y = g.centreY(0) - r / 2;
-  m.info.origin.orientation.w = 1;
-  m.data.resize(static_cast<size_t>(n) * n);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const double p = g.prob(i, j);
-      m.data[static_cast<size_t>(j) * n + i] =
-          std::abs(p - 0.5) < 1e-3 ? -1 : static_cast<int8_t>(std::lround(100 * p));
-    }
-  grid_pub_.publish(m);
+  grid_pub_.publish(
+      gridToRos(pipe_.grid().toMrpt(), have_odom_ ? o_.odom_frame : o_.base_frame, stamp));
 }
 
 // 360 degrees around the robot, per bearing the nearest occupied cell of the

@@ -121,6 +121,31 @@ struct PerceiveNodeOptions {
 /** Runs until stopped or `duration`; returns the number of frames processed. */
 size_t runPerceiveNode(const PerceiveNodeOptions& o);
 
+/** `carenav ros slam`: a SLAM back end of `carenav slam` (slam::createMapper)
+ *  fed live. Subscribes `scan` (sensor_msgs/LaserScan, the profile's first
+ *  lidar2d, placed by its pose), `odom` (nav_msgs/Odometry; without any, the
+ *  `odom -> base_link` transform of `tf`) and `~save` (std_msgs/Empty);
+ *  publishes `map` (nav_msgs/OccupancyGrid, latched, every `map_every`
+ *  scans inserted in the map) and `map -> odom` on `tf`. At the end and on
+ *  each `~save` it writes the outputs of `carenav slam` to `out_dir`. */
+struct SlamNodeOptions {
+  std::string profile;
+  std::vector<std::string> sets;
+  std::string method;   ///< icp | icp-graph | rbpf; empty: the profile's [slam] method
+  std::string out_dir;  ///< map.simplemap, map.gridmap.gz, map.yaml/.pgm, map.png, ...
+  /** Scans inserted in the map (keyframes) between two `map` messages; 0:
+   *  the `~map_every` parameter, else 5. */
+  int map_every = 0;
+  double duration = 0;  ///< s; 0: until stopped
+  std::string odom_frame = "odom", base_frame = "base_link", map_frame = "map";
+  std::vector<std::string> ros_args;
+  const std::atomic<bool>* stop = nullptr;
+  bool quiet = false;
+};
+/** Runs until stopped or `duration`, then writes the outputs; returns the
+ *  number of scans mapped. Throws InputError when none was (nothing to write). */
+size_t runSlamNode(const SlamNodeOptions& o);
+
 /** ros::init with the node's name and ROS arguments (once per process);
  *  throws InputError when the master cannot be reached within `wait_s`. */
 void initRosNode(const std::string& name, const std::vector<std::string>& ros_args,
@@ -130,7 +155,8 @@ void initRosNode(const std::string& name, const std::vector<std::string>& ros_ar
  *  -> "navigation.v_max=VALUE", `~sensor/laser/x` -> "sensor.laser.x=VALUE"
  *  (every '/' but the last becomes '.'; ROS names have no dots). Call after
  *  initRosNode; command-line --set values go after these and win. */
-std::vector<std::string> privateParamOverrides();
+/** `node_keys`: the node's own parameters (e.g. `map_every`), not profile keys, left out. */
+std::vector<std::string> privateParamOverrides(const std::vector<std::string>& node_keys = {});
 
 /** "section.key=value" from a parameter's name below the node's namespace
  *  and its value as text (exposed for tests); "" for a name without a
