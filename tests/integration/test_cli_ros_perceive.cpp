@@ -2,7 +2,8 @@
 // the simulator (`carenav ros sim`, its Kinect cloud on `points`) facing a
 // staircase going down publishes a virtual scan whose ranges ahead end at
 // the stair edge; facing open floor they are long or empty. Skipped
-// without the ROS part.
+// without the ROS part. A bag the sim records with its clouds perceives as
+// the rawlog `import rosbag --cloud` makes of it.
 #include "cli_helpers.h"
 
 #ifdef CARENAV_TEST_WITH_ROS
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <regex>
 
 #include "ros_nodes_helpers.h"
 #endif
@@ -64,6 +66,16 @@ Perceived perceiveAt(const fs::path& dir, const std::string& start, const std::s
   return r;
 }
 
+/** The "cells" object of every frame in a perceive summary.json. */
+std::vector<std::string> frameCells(const std::string& summary) {
+  std::vector<std::string> out;
+  const std::regex re("\"cells\": \\{[^}]*\\}");
+  for (auto it = std::sregex_iterator(summary.begin(), summary.end(), re);
+       it != std::sregex_iterator(); ++it)
+    out.push_back(it->str());
+  return out;
+}
+
 float median(std::vector<float> v) {
   if (v.empty()) return std::nanf("");
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
@@ -96,6 +108,41 @@ TEST(CliRosPerceive, VirtualScanHasTheStairsDownAhead) {
   EXPECT_GT(open, 3.5) << "open floor ahead: long or no ranges";
   EXPECT_EQ(stairs.grid_frame, "odom") << "the grid follows the sim's odometry";
   EXPECT_GT(stairs.occupied, flat.occupied);
+#endif
+}
+
+TEST(CliRosPerceive, SimBagCloudsPerceiveAsTheirRawlog) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  const auto bag = dir / "sim.bag";
+  const pid_t sim = startRosNode(dir, "sim",
+                                 {"--profile", kWalker, "--world", kStairs, "--start", "4.5,2.0,0",
+                                  "--duration", "3", "--record", bag.string()});
+  ASSERT_EQ(waitExit(sim), 0) << slurp(dir / "sim.log");
+  const auto rawlog = dir / "sim.rawlog";
+  const auto imp = carenav({"-q", "import", "rosbag", bag.string(), "--cloud", "/points=kinect",
+                            "--out", rawlog.string(), "--json"});
+  ASSERT_EQ(imp.code, 0) << imp.err;
+  const uint64_t clouds = jsonNumber(imp.out, "clouds");
+  EXPECT_GE(clouds, 20u) << imp.out;  // the Kinect at 10 Hz for 3 s
+  for (const auto& [input, out] :
+       {std::pair{bag, dir / "from_bag"}, {rawlog, dir / "from_rawlog"}}) {
+    const auto r = carenav({"-q", "perceive", "--profile", kWalker, "--rawlog", input.string(),
+                            "--out", out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(jsonNumber(slurp(out / "summary.json"), "frame_count"), clouds) << input;
+  }
+  const auto a = frameCells(slurp(dir / "from_bag" / "summary.json"));
+  const auto b = frameCells(slurp(dir / "from_rawlog" / "summary.json"));
+  EXPECT_EQ(a.size(), clouds);
+  EXPECT_EQ(a, b) << "the bag and its rawlog give the same local grids";
+  ASSERT_FALSE(a.empty());
+  std::smatch occ;
+  ASSERT_TRUE(std::regex_search(a.back(), occ, std::regex("\"occupied\": ([0-9]+)")));
+  std::cout << clouds << " clouds; the last frame: " << a.back() << "\n";
+  EXPECT_GT(std::stoi(occ[1]), 100) << "the stair edge and the walls are obstacles";
 #endif
 }
 

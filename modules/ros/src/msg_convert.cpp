@@ -116,6 +116,10 @@ mrpt::obs::CObservation3DRangeScan::Ptr cloudFromRos(const sensor_msgs::PointClo
     o->points3D_x.push_back(v[0]);
     o->points3D_y.push_back(v[1]);
     o->points3D_z.push_back(v[2]);
+    // the point's pixel (column, row) of an organised cloud; MRPT's
+    // serialisation wants one per point
+    o->points3D_idxs_x.push_back(static_cast<uint16_t>(i % m.width));
+    o->points3D_idxs_y.push_back(static_cast<uint16_t>(i / m.width));
   }
   return o;
 }

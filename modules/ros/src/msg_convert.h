@@ -40,7 +40,8 @@ sensor_msgs::LaserScan scanToRos(const mrpt::obs::CObservation2DRangeScan& s,
 
 /** A PointCloud2 with float x, y, z fields in the sensor's body frame (x
  *  forward, y left, z up) as a depth observation of points (points with a
- *  NaN or infinite coordinate left out) at `sensor_pose` on the robot;
+ *  NaN or infinite coordinate left out, each with its pixel: column, row)
+ *  at `sensor_pose` on the robot;
  *  nullptr when it has no float x, y, z or its data is shorter than its
  *  size says. */
 mrpt::obs::CObservation3DRangeScan::Ptr cloudFromRos(const sensor_msgs::PointCloud2& m,
