@@ -61,31 +61,30 @@ inline pid_t startRosNode(const fs::path& dir, const std::string& node,
   return spawn(argv, dir / (name + ".log"));
 }
 
-/** The messages of one topic as this program's node receives them (call
- *  spin() from a ros::AsyncSpinner of the test). */
+/** The messages of one topic as this program's node receives them, all
+ *  kept (call spin() from a ros::AsyncSpinner of the test). */
 template <class M>
 class TopicLog {
  public:
   explicit TopicLog(const std::string& topic) {
-    sub_ = nh_.subscribe<M>(topic, 20, [this](const typename M::ConstPtr& m) {
+    sub_ = nh_.subscribe<M>(topic, 50, [this](const typename M::ConstPtr& m) {
       std::lock_guard<std::mutex> l(mu_);
-      last_ = *m;
-      ++count_;
+      all_.push_back(*m);
     });
   }
   ~TopicLog() { sub_.shutdown(); }
   size_t count() const {
     std::lock_guard<std::mutex> l(mu_);
-    return count_;
+    return all_.size();
   }
   std::optional<M> last() const {
     std::lock_guard<std::mutex> l(mu_);
-    return last_;
+    if (all_.empty()) return std::nullopt;
+    return all_.back();
   }
-  void clear() {
+  std::vector<M> all() const {
     std::lock_guard<std::mutex> l(mu_);
-    last_.reset();
-    count_ = 0;
+    return all_;
   }
 
  private:
@@ -93,8 +92,7 @@ class TopicLog {
   ::ros::NodeHandle nh_;
   ::ros::Subscriber sub_;
   mutable std::mutex mu_;
-  std::optional<M> last_;
-  size_t count_ = 0;
+  std::vector<M> all_;
 };
 
 }  // namespace carenav_ros_test

@@ -42,13 +42,22 @@ mrpt::maps::COccupancyGridMap2D loadMap(const NavigateNodeOptions& o) {
   return io::loadGridMap(o.map);
 }
 
+/** A place or room of the map's places file (as `carenav navigate --goal
+ *  NAME`); throws InputError for an unknown name or a bad places file. */
+navigation::SessionGoal placeGoal(const NavigateNodeOptions& o,
+                                  const mrpt::maps::COccupancyGridMap2D& grid,
+                                  const std::string& name) {
+  const std::string places = places::placesPathForMap(!o.world.empty() ? o.world : o.map);
+  const places::Goal g = places::resolveGoal(places::readPlacesFile(places), grid, name);
+  return {TPose2D{g.x, g.y, mrpt::DEG2RAD(g.heading_deg)},
+          g.place.empty() ? g.room : g.room + "/" + g.place};
+}
+
 std::optional<TPose2D> goalFromText(const NavigateNodeOptions& o,
                                     const mrpt::maps::COccupancyGridMap2D& grid) {
   if (o.goal.empty()) return std::nullopt;
   if (auto g = navigation::parsePoseText(o.goal)) return g;
-  const std::string places = places::placesPathForMap(!o.world.empty() ? o.world : o.map);
-  const places::Goal g = places::resolveGoal(places::readPlacesFile(places), grid, o.goal);
-  return TPose2D{g.x, g.y, mrpt::DEG2RAD(g.heading_deg)};
+  return placeGoal(o, grid, o.goal).pose;
 }
 
 class NavigateNode {
@@ -60,6 +69,7 @@ class NavigateNode {
     subscribeOthers();
     odom_ = nh_.subscribe("odom", 20, &NavigateNode::onOdom, this);
     goal_ = nh_.subscribe("move_base_simple/goal", 2, &NavigateNode::onGoal, this);
+    place_ = pnh_.subscribe("goal_place", 2, &NavigateNode::onGoalPlace, this);
     if (s.walker()) intent_ = nh_.subscribe("intent", 5, &NavigateNode::onIntent, this);
     if (o.external_pose) amcl_ = nh_.subscribe("amcl_pose", 5, &NavigateNode::onPose, this);
     cmd_ = nh_.advertise<geometry_msgs::Twist>("cmd_vel", 5);
@@ -86,6 +96,8 @@ class NavigateNode {
   void onPoints(const SensorParams& sp, const sensor_msgs::PointCloud2& m);
   void onOdom(const nav_msgs::Odometry& m);
   void onGoal(const geometry_msgs::PoseStamped& m);
+  void onGoalPlace(const std_msgs::String& m);
+  void acceptGoal(const navigation::SessionGoal& g);
   /** A localiser's pose (amcl_pose): the navigator's map pose from now on
    *  (it follows odometry from there). */
   void onPose(const geometry_msgs::PoseWithCovarianceStamped& m) {
@@ -104,7 +116,7 @@ class NavigateNode {
   const NavigateNodeOptions& o_;
   NavigationSession& s_;
   ::ros::NodeHandle nh_, pnh_;
-  ::ros::Subscriber scan_, odom_, goal_, intent_, amcl_;
+  ::ros::Subscriber scan_, odom_, goal_, place_, intent_, amcl_;
   std::vector<::ros::Subscriber> others_;  // scan_LABEL, points[_LABEL]
   ::ros::Publisher cmd_, path_, status_, pose_, tf_;
   std::optional<SensorParams> lidar_;
@@ -175,11 +187,27 @@ void NavigateNode::onOdom(const nav_msgs::Odometry& m) {
 
 void NavigateNode::onGoal(const geometry_msgs::PoseStamped& m) {
   if (s_.walker()) return say("goal ignored: the walker follows its user");
-  const TPose2D g{m.pose.position.x, m.pose.position.y, yawOf(m.pose.orientation)};
+  acceptGoal({{m.pose.position.x, m.pose.position.y, yawOf(m.pose.orientation)}, ""});
+}
+
+// A place name: resolved as `navigate --goal NAME`; an unknown one (or no
+// map, no places file) is a warning and leaves the goal as it was.
+void NavigateNode::onGoalPlace(const std_msgs::String& m) {
+  if (s_.walker()) return say("goal ignored: the walker follows its user");
+  if (!s_.setup().map) return say("warning: goal place '" + m.data + "': no map (--map, --world)");
+  try {
+    acceptGoal(placeGoal(o_, *s_.setup().map, m.data));
+  } catch (const InputError& e) {
+    say(std::string("warning: goal place '") + m.data + "': " + e.what() + "; goal unchanged");
+  }
+}
+
+void NavigateNode::acceptGoal(const navigation::SessionGoal& g) {
   const TPose2D here = s_.navigator().mapPose();
-  const bool ok = s_.setGoals({{g, ""}}, false, 0, {here.x, here.y});
+  const bool ok = s_.setGoals({g}, false, 0, {here.x, here.y});
   route_sent_ = false;
-  say(ok ? "goal accepted" : "goal accepted, no route yet (replanning)");
+  const std::string what = g.label.empty() ? "goal accepted" : "goal accepted: " + g.label;
+  say(ok ? what : what + ", no route yet (replanning)");
 }
 
 void NavigateNode::say(const std::string& text) {
