@@ -13,6 +13,7 @@
 #include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Odometry.h>
 #include <std_msgs/Empty.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
 
@@ -44,6 +45,26 @@ void drive(::ros::Publisher& cmd, double v, double w, int tenths) {
   }
 }
 
+/** `ros sim` (Interbot in the apartment at 1.5, 1.5, 0) and `ros slam`
+ *  writing to DIR/map with `extra` arguments. */
+std::pair<pid_t, pid_t> startSimAndSlam(const fs::path& dir, std::vector<std::string> extra) {
+  const pid_t sim = startRosNode(
+      dir, "sim",
+      {"--profile", kInterbot, "--world", kApartment, "--start", "1.5,1.5,0", "--duration", "120"});
+  std::vector<std::string> args{"--profile",  kInterbot, "--out", (dir / "map").string(),
+                                "--duration", "100"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return {sim, startRosNode(dir, "slam", args)};
+}
+
+/** Ends both (SIGINT): each exits 0. */
+void stopSimAndSlam(const fs::path& dir, std::pair<pid_t, pid_t> p) {
+  ::kill(p.second, SIGINT);
+  EXPECT_EQ(waitExit(p.second), 0) << slurp(dir / "slam.log");
+  ::kill(p.first, SIGINT);
+  EXPECT_EQ(waitExit(p.first), 0) << slurp(dir / "sim.log");
+}
+
 #define SKIP_WITHOUT_ROS() \
   if (!haveRosmaster()) GTEST_SKIP() << "no rosmaster (Debian package python3-rosmaster)"
 #else
@@ -64,13 +85,9 @@ TEST(CliRosSlam, MapsAShortDriveAndSaves) {
   auto save = nh.advertise<std_msgs::Empty>(name + "/save", 1);
   ::ros::AsyncSpinner spinner(1);
   spinner.start();
-  const pid_t sim = startRosNode(
-      dir, "sim",
-      {"--profile", kInterbot, "--world", kApartment, "--start", "1.5,1.5,0", "--duration", "120"});
   const auto out = dir / "map";
-  const pid_t slam = startRosNode(
-      dir, "slam",
-      {"--profile", kInterbot, "--out", out.string(), "--duration", "100", "--map-every", "2"});
+  const auto nodes = startSimAndSlam(dir, {"--map-every", "2"});
+  const pid_t slam = nodes.second;
   while ((cmd.getNumSubscribers() == 0 || save.getNumSubscribers() == 0) && running(slam))
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   drive(cmd, 0.25, 0.0, 40);  // 1 m east
@@ -80,10 +97,7 @@ TEST(CliRosSlam, MapsAShortDriveAndSaves) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   EXPECT_TRUE(fs::exists(out / "map.yaml")) << "~save wrote the outputs while running";
   drive(cmd, 0.2, 0.0, 20);
-  ::kill(slam, SIGINT);
-  EXPECT_EQ(waitExit(slam), 0) << slurp(dir / "slam.log");
-  ::kill(sim, SIGINT);
-  EXPECT_EQ(waitExit(sim), 0) << slurp(dir / "sim.log");
+  stopSimAndSlam(dir, nodes);
   spinner.stop();
   // The latched map: published again as keyframes came, walls in it.
   ASSERT_GE(maps.count(), 2u) << slurp(dir / "slam.log");
@@ -114,6 +128,43 @@ TEST(CliRosSlam, MapsAShortDriveAndSaves) {
   EXPECT_GT(p.x - 1.5, 1.0) << "it drove east";
   EXPECT_LT(std::hypot(traj.back().x - (p.x - 1.5), traj.back().y - (p.y - 1.5)), 0.15)
       << "the mapped end pose is the true one";
+#endif
+}
+
+// Without an Odometry topic (odom remapped to one nobody publishes) the
+// odometry is the sim's odom -> base_link on tf: map -> odom then places
+// the odometry frame (the world's, where odom starts at 1.5, 1.5) at
+// (-1.5, -1.5) in the map (where the robot started); with no odometry at
+// all it would be the mapper's own pose.
+TEST(CliRosSlam, OdometryFromTfWithoutTheOdomTopic) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  TopicLog<tf2_msgs::TFMessage> tfs("tf");
+  ::ros::NodeHandle nh;
+  auto cmd = nh.advertise<geometry_msgs::Twist>("cmd_vel", 5);
+  ::ros::AsyncSpinner spinner(1);
+  spinner.start();
+  const auto nodes = startSimAndSlam(dir, {"odom:=no_odometry_here"});
+  while (cmd.getNumSubscribers() == 0 && running(nodes.second))
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  drive(cmd, 0.25, 0.0, 40);
+  drive(cmd, 0.15, 0.3, 20);
+  stopSimAndSlam(dir, nodes);
+  spinner.stop();
+  std::optional<geometry_msgs::Transform> map_odom;
+  for (const auto& m : tfs.all())
+    for (const auto& t : m.transforms)
+      if (t.header.frame_id == "map" && t.child_frame_id == "odom") map_odom = t.transform;
+  ASSERT_TRUE(map_odom) << "slam publishes map -> odom";
+  std::cout << "map -> odom at the end: " << map_odom->translation.x << ", "
+            << map_odom->translation.y << "\n";
+  EXPECT_NEAR(map_odom->translation.x, -1.5, 0.15);
+  EXPECT_NEAR(map_odom->translation.y, -1.5, 0.15);
+  const auto traj = carenav::io::readTum((dir / "map" / "trajectory.tum").string());
+  ASSERT_FALSE(traj.empty());
+  EXPECT_GT(traj.back().x, 1.0) << "the drive east is mapped";
 #endif
 }
 
