@@ -3,15 +3,20 @@
 // staircase going down publishes a virtual scan whose ranges ahead end at
 // the stair edge; facing open floor they are long or empty. Skipped
 // without the ROS part. A bag the sim records with its clouds perceives as
-// the rawlog `import rosbag --cloud` makes of it.
+// the rawlog `import rosbag --cloud` makes of it. A depth image with its
+// CameraInfo (the test's own: floor up to a wall 2 m ahead) gives a scan
+// ending at the wall.
 #include "cli_helpers.h"
 
 #ifdef CARENAV_TEST_WITH_ROS
 #include <nav_msgs/OccupancyGrid.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/LaserScan.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <regex>
 
 #include "ros_nodes_helpers.h"
@@ -64,6 +69,30 @@ Perceived perceiveAt(const fs::path& dir, const std::string& start, const std::s
     r.occupied = std::count_if(g->data.begin(), g->data.end(), [](int8_t v) { return v > 55; });
   }
   return r;
+}
+
+/** A depth camera 0.5 m above the floor looking straight ahead (64 x 48 px,
+ *  f = 50 px) at a wall 2 m away: the lower rows see the floor before it.
+ *  16UC1 in mm. */
+std::pair<sensor_msgs::Image, sensor_msgs::CameraInfo> floorAndWall() {
+  sensor_msgs::CameraInfo info;
+  info.width = 64;
+  info.height = 48;
+  info.K = {50, 0, 31.5, 0, 50, 23.5, 0, 0, 1};
+  sensor_msgs::Image img;
+  img.encoding = "16UC1";
+  img.width = 64;
+  img.height = 48;
+  img.step = 128;
+  img.data.resize(128 * 48);
+  for (uint32_t r = 0; r < 48; ++r)
+    for (uint32_t c = 0; c < 64; ++c) {
+      const double kz = (23.5 - r) / 50;  // up along the ray per metre of depth
+      const double depth = kz < -0.25 ? 0.5 / -kz : 2.0;
+      const auto mm = static_cast<uint16_t>(std::lround(1000 * depth));
+      std::memcpy(&img.data[r * 128 + 2 * c], &mm, 2);
+    }
+  return {img, info};
 }
 
 /** The "cells" object of every frame in a perceive summary.json. */
@@ -143,6 +172,43 @@ TEST(CliRosPerceive, SimBagCloudsPerceiveAsTheirRawlog) {
   ASSERT_TRUE(std::regex_search(a.back(), occ, std::regex("\"occupied\": ([0-9]+)")));
   std::cout << clouds << " clouds; the last frame: " << a.back() << "\n";
   EXPECT_GT(std::stoi(occ[1]), 100) << "the stair edge and the walls are obstacles";
+#endif
+}
+
+TEST(CliRosPerceive, DepthImageWithCameraInfo) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  TopicLog<sensor_msgs::LaserScan> scans("virtual_scan");
+  ::ros::NodeHandle nh;
+  auto image = nh.advertise<sensor_msgs::Image>("depth/image", 2);
+  auto info = nh.advertise<sensor_msgs::CameraInfo>("depth/camera_info", 2);
+  ::ros::AsyncSpinner spinner(1);
+  spinner.start();
+  const pid_t per = startRosNode(dir, "perceive",
+                                 {"--profile", kWalker, "--sensor-pose", "0,0,0.5,0,0,0",
+                                  "--duration", "50", "odom:=no_odometry_here"});
+  auto [img, cam] = floorAndWall();
+  while (scans.count() < 5 && running(per)) {
+    img.header.stamp = cam.header.stamp = ::ros::Time::now();
+    info.publish(cam);
+    image.publish(img);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ::kill(per, SIGINT);
+  EXPECT_EQ(waitExit(per), 0) << slurp(dir / "perceive.log");
+  spinner.stop();
+  const auto s = scans.last();
+  ASSERT_TRUE(s) << slurp(dir / "perceive.log");
+  std::vector<float> ahead;
+  for (size_t k = 0; k < s->ranges.size(); ++k)
+    if (std::abs(s->angle_min + k * s->angle_increment) < 10 * M_PI / 180)
+      ahead.push_back(s->ranges[k]);
+  const float wall = median(ahead);
+  std::cout << "depth image: the wall ahead at " << wall << " m (2 m)\n";
+  EXPECT_NEAR(wall, 2.0, 0.1);
+  EXPECT_EQ(s->header.frame_id, "base_link");
 #endif
 }
 
