@@ -136,7 +136,7 @@ TEST(CliRosPerceive, VirtualScanHasTheStairsDownAhead) {
   EXPECT_LT(edge, 1.9) << "the stair edge ends the ranges ahead";
   EXPECT_GT(open, 3.5) << "open floor ahead: long or no ranges";
   EXPECT_EQ(stairs.grid_frame, "odom") << "the grid follows the sim's odometry";
-  EXPECT_GT(stairs.occupied, flat.occupied);
+  EXPECT_GT(stairs.occupied, 100u) << "the stair edge and the side walls are in the grid";
 #endif
 }
 
