@@ -1,4 +1,5 @@
-// carenav import rosbag BAG --out X.rawlog [--scan TOPIC[=LABEL]]... [--odom TOPIC|tf|none]
+// carenav import rosbag BAG --out X.rawlog [--scan TOPIC[=LABEL]]... [--cloud TOPIC[=LABEL]]...
+//                        [--odom TOPIC|tf|none]
 // (built with the ROS part only). Also registers `.bag` with the rawlog
 // reader, so every command that reads a rawlog reads a bag.
 #include "commands.h"
@@ -30,8 +31,9 @@ void addImportRosbag(CLI::App& import_cmd, const GlobalOptions& g) {
   auto* cmd = import_cmd.add_subcommand(
       "rosbag",
       "Convert a ROS 1 bag to an MRPT rawlog (observation-only form, gzip): its "
-      "sensor_msgs/LaserScan as 2D scans (sensor pose from /tf_static or /tf up to the base "
-      "frame, else the profile's [sensor.LABEL]) and its odometry (nav_msgs/Odometry, or the "
+      "sensor_msgs/LaserScan as 2D scans and PointCloud2 as 3D points (sensor pose from "
+      "/tf_static or /tf up to the base frame, else the profile's [sensor.LABEL]) and its odometry "
+      "(nav_msgs/Odometry, or the "
       "odom -> base_link transform of /tf) with the messages' own time stamps. The bag is read "
       "front to back without its index: a truncated or corrupt bag stops with exit 2 naming "
       "the byte where it broke; what was read before it is written.");
@@ -41,6 +43,10 @@ void addImportRosbag(CLI::App& import_cmd, const GlobalOptions& g) {
   cmd->add_option("--scan", a->opt.read.scans,
                   "LaserScan topic to read, TOPIC or TOPIC=LABEL (the sensor label; default: "
                   "the scan's frame_id); repeatable. Default: every LaserScan topic");
+  cmd->add_option("--cloud", a->opt.read.clouds,
+                  "PointCloud2 topic to read, TOPIC or TOPIC=LABEL (as --scan), as "
+                  "CObservation3DRangeScan points for carenav perceive; repeatable, or 'none'. "
+                  "Default: every PointCloud2 topic");
   cmd->add_option("--odom", a->opt.read.odom,
                   "Odometry: a nav_msgs/Odometry topic, 'tf' (odom -> base frame on /tf) or "
                   "'none'. Default: the bag's first Odometry topic, else tf");

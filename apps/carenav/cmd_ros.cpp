@@ -1,4 +1,4 @@
-// carenav ros sim|navigate ...: carenav as ROS 1 nodes (built with the ROS
+// carenav ros sim|navigate|localize|perceive|slam ...: carenav as ROS 1 nodes (built with the ROS
 // part only; docs/ros.md). ROS arguments (from:=to, _param:=value,
 // __name:=node) follow the options.
 #include "commands.h"
@@ -123,12 +123,67 @@ void addLocalize(CLI::App& ros, const GlobalOptions& g) {
   });
 }
 
+void addPerceive(CLI::App& ros, const GlobalOptions& g) {
+  auto o = std::make_shared<ros::PerceiveNodeOptions>();
+  auto* cmd = ros.add_subcommand(
+      "perceive",
+      "The perception pipeline as a ROS node: subscribes points (PointCloud2 in the camera's "
+      "body frame) or depth/image + depth/camera_info, and odom; publishes local_grid "
+      "(OccupancyGrid) and virtual_scan (LaserScan: obstacles, stairs down, gutters, outlets).");
+  cmd->add_option("--profile", o->profile, "Robot profile ([perception], its depth camera)")
+      ->required();
+  cmd->add_option("--set", o->sets, "Profile override section.key=value (repeatable)");
+  cmd->add_option("--method", o->method, "rrt-gpd (default), ransac or height-band");
+  cmd->add_option("--sensor", o->sensor,
+                  "The depth camera [sensor.LABEL] (default: the profile's)");
+  cmd->add_option(
+      "--sensor-pose", o->sensor_pose,
+      "Camera pose on the robot x,y,z,yaw,pitch,roll (m, deg) instead of the profile's");
+  cmd->add_option("--duration", o->duration, "Seconds; 0: until stopped");
+  cmd->allow_extras();
+  cmd->callback([o, cmd, &g] {
+    o->ros_args = cmd->remaining();
+    o->stop = &g_ros_stop;
+    o->quiet = g.quiet;
+    stopOnSignals();
+    ros::runPerceiveNode(*o);
+  });
+}
+
+void addSlam(CLI::App& ros, const GlobalOptions& g) {
+  auto o = std::make_shared<ros::SlamNodeOptions>();
+  auto* cmd = ros.add_subcommand(
+      "slam",
+      "A SLAM back end as a ROS node: subscribes scan, odom (or tf) and ~save; publishes map "
+      "(latched, every --map-every scans inserted) and map -> odom on tf. Writes the outputs of "
+      "carenav slam to --out on ~save and at the end (Ctrl-C / SIGTERM or --duration).");
+  cmd->add_option("--profile", o->profile, "Robot profile ([slam], [icp], [rbpf], its lidar2d)")
+      ->required();
+  cmd->add_option("--set", o->sets, "Profile override section.key=value (repeatable)");
+  cmd->add_option("--method", o->method, "icp | icp-graph | rbpf (default: the profile's)");
+  cmd->add_option("--out", o->out_dir, "Output folder (created)")->required();
+  cmd->add_option("--map-every", o->map_every,
+                  "Scans inserted in the map between map messages (default: ~map_every, else 5)");
+  cmd->add_option("--duration", o->duration, "Seconds; 0: until stopped");
+  cmd->allow_extras();
+  cmd->callback([o, cmd, &g] {
+    prepareOutputFolder(o->out_dir);
+    o->ros_args = cmd->remaining();
+    o->stop = &g_ros_stop;
+    o->quiet = g.quiet;
+    stopOnSignals();
+    ros::runSlamNode(*o);
+  });
+}
+
 void addRosCommand(CLI::App& app, const GlobalOptions& g) {
   auto* cmd = app.add_subcommand("ros", "carenav as ROS 1 nodes (docs/ros.md)");
   cmd->require_subcommand(1);
   addSim(*cmd, g);
   addNavigate(*cmd, g);
   addLocalize(*cmd, g);
+  addPerceive(*cmd, g);
+  addSlam(*cmd, g);
 }
 
 }  // namespace

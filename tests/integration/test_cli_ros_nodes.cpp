@@ -13,7 +13,7 @@
 
 #include <mutex>
 
-#include "ros_master.h"
+#include "ros_nodes_helpers.h"
 #endif
 
 namespace {
@@ -23,44 +23,8 @@ using namespace carenav_test;
 #ifdef CARENAV_TEST_WITH_ROS
 using namespace carenav_ros_test;
 
-bool haveRosmaster() { return std::system("command -v rosmaster >/dev/null 2>&1") == 0; }
-
 const std::string kApartment = kSrc + "/maps/worlds/apartment.yaml";
 const std::string kInterbot = kSrc + "/ini/interbot.ini";
-
-/** One rosmaster for every test of this program (roscpp initialises once
- *  per process, so this program's own node talks to one master), and a
- *  folder per test for its logs and outputs. */
-RosMaster& sharedMaster() {
-  static RosMaster m(scratch());
-  return m;
-}
-
-fs::path testDir() {
-  const auto d =
-      sharedMaster().dir() / ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  fs::create_directories(d);
-  return d;
-}
-
-/** A node name of the test's own: private parameters stay on the shared
- *  master under the node's name after it ends. */
-std::string nodeName(const char* node) {
-  return std::string("__name:=") + node + "_" +
-         ::testing::UnitTest::GetInstance()->current_test_info()->name();
-}
-
-/** This program's own ROS node (once; never shut down before exit). */
-void initTestNode() {
-  static const bool done = [] {
-    int argc = 1;
-    char name[] = "test";
-    char* argv[] = {name, nullptr};
-    ::ros::init(argc, argv, "carenav_test", ::ros::init_options::NoSigintHandler);
-    return true;
-  }();
-  (void)done;
-}
 
 pid_t startSim(const fs::path& dir, const std::string& start) {
   return spawn({kBin, "-q", "ros", "sim", "--profile", kInterbot, "--world", kApartment, "--start",

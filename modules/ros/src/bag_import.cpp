@@ -1,4 +1,4 @@
-// carenav import rosbag: a bag's scans and odometry to an observation-only
+// carenav import rosbag: a bag's scans, clouds and odometry to an observation-only
 // rawlog (gzip), written to a temporary name and renamed.
 #include <carenav/common/errors.h>
 #include <carenav/common/json.h>
@@ -22,6 +22,11 @@ std::string BagImportStats::toText() const {
   o << "scans:        " << notes.scans;
   if (notes.scans_no_tf)
     o << " (" << notes.scans_no_tf << " placed by the profile or at the origin: no tf)";
+  if (notes.clouds) {
+    o << "\nclouds:       " << notes.clouds;
+    if (notes.clouds_no_tf)
+      o << " (" << notes.clouds_no_tf << " placed by the profile or at the origin: no tf)";
+  }
   o << "\nodometry:     " << notes.odometry << "\n";
   o << "written:      " << written << " observations\n";
   o << "topics:\n";
@@ -36,6 +41,8 @@ std::string BagImportStats::toJson() const {
   j.key("skipped").value(static_cast<uint64_t>(notes.skipped));
   j.key("scans").value(static_cast<uint64_t>(notes.scans));
   j.key("scans_without_tf").value(static_cast<uint64_t>(notes.scans_no_tf));
+  j.key("clouds").value(static_cast<uint64_t>(notes.clouds));
+  j.key("clouds_without_tf").value(static_cast<uint64_t>(notes.clouds_no_tf));
   j.key("odometry").value(static_cast<uint64_t>(notes.odometry));
   j.key("written").value(static_cast<uint64_t>(written));
   j.key("topics").beginObject();

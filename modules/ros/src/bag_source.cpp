@@ -11,6 +11,7 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/serialization.h>
 #include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include <optional>
@@ -67,10 +68,10 @@ class BagSource : public io::ObservationSource {
         o_(std::move(o)),
         notes_(notes ? notes : std::make_shared<BagReadNotes>()),
         bag_(open(path)) {
-    for (const auto& s : o_.scans) {
-      const size_t eq = s.find('=');
-      scan_labels_[s.substr(0, eq)] = eq == std::string::npos ? "" : s.substr(eq + 1);
-    }
+    for (const auto& s : o_.scans) scan_labels_.insert(topicLabel(s));
+    for (const auto& s : o_.clouds)
+      if (s != "none") cloud_labels_.insert(topicLabel(s));
+    no_clouds_ = o_.clouds.size() == 1 && o_.clouds[0] == "none";
     o_.odom_frame = bareFrame(o_.odom_frame);
     o_.base_frame = bareFrame(o_.base_frame);
   }
@@ -86,17 +87,29 @@ class BagSource : public io::ObservationSource {
     }
   }
   CObservation::Ptr take(const BagMessage& m);
+  static std::pair<std::string, std::string> topicLabel(const std::string& s) {
+    const size_t eq = s.find('=');
+    return {s.substr(0, eq), eq == std::string::npos ? "" : s.substr(eq + 1)};
+  }
   CObservation::Ptr scan(const BagMessage& m, const std::string& label);
+  CObservation::Ptr cloud(const BagMessage& m, const std::string& label);
+  /** The label (given, else the frame, else the topic) and the pose on the
+   *  robot (tf, else the profile's by label, else the origin: `no_tf` counts). */
+  std::pair<std::string, CPose3D> placed(const std::string& frame_id, const std::string& given,
+                                         const std::string& topic, size_t& no_tf) const;
   CObservation::Ptr odometry(const BagMessage& m);
   CObservation::Ptr transforms(const BagMessage& m);
   bool odomTopic(const BagConnection& c);
   bool scanTopic(const BagConnection& c, std::string& label) const;
+  bool cloudTopic(const BagConnection& c, std::string& label) const;
 
   std::string path_;
   BagReadOptions o_;
   std::shared_ptr<BagReadNotes> notes_;
   BagFile bag_;
   std::map<std::string, std::string> scan_labels_;  // topic -> label ("" default)
+  std::map<std::string, std::string> cloud_labels_;
+  bool no_clouds_ = false;
   FrameTree frames_;
   std::optional<std::string> odom_topic_;  // the Odometry topic read, once chosen
 };
@@ -132,6 +145,7 @@ CObservation::Ptr BagSource::take(const BagMessage& m) {
   const BagConnection& c = *m.connection;
   std::string label;
   if (scanTopic(c, label)) return scan(m, label);
+  if (cloudTopic(c, label)) return cloud(m, label);
   if (odomTopic(c)) return odometry(m);
   if (isType<tf2_msgs::TFMessage>(c) && (c.topic == "/tf" || c.topic == "/tf_static"))
     return transforms(m);
@@ -148,6 +162,15 @@ bool BagSource::scanTopic(const BagConnection& c, std::string& label) const {
   return true;
 }
 
+bool BagSource::cloudTopic(const BagConnection& c, std::string& label) const {
+  if (no_clouds_ || !isType<sensor_msgs::PointCloud2>(c)) return false;
+  if (cloud_labels_.empty()) return true;
+  const auto it = cloud_labels_.find(c.topic);
+  if (it == cloud_labels_.end()) return false;
+  label = it->second;
+  return true;
+}
+
 bool BagSource::odomTopic(const BagConnection& c) {
   if (!isType<nav_msgs::Odometry>(c) || o_.odom == "tf" || o_.odom == "none") return false;
   if (!odom_topic_) {
@@ -157,21 +180,37 @@ bool BagSource::odomTopic(const BagConnection& c) {
   return *odom_topic_ == c.topic;
 }
 
+std::pair<std::string, CPose3D> BagSource::placed(const std::string& frame_id,
+                                                  const std::string& given,
+                                                  const std::string& topic, size_t& no_tf) const {
+  const std::string frame = bareFrame(frame_id);
+  const std::string label = !given.empty() ? given : !frame.empty() ? frame : bareFrame(topic);
+  if (const auto pose = frames_.in(frame, o_.base_frame)) return {label, *pose};
+  ++no_tf;
+  const auto it = o_.sensor_poses.find(label);
+  return {label, it != o_.sensor_poses.end() ? it->second : CPose3D()};
+}
+
 CObservation::Ptr BagSource::scan(const BagMessage& m, const std::string& given) {
   const auto msg = decode<sensor_msgs::LaserScan>(m);
-  const std::string frame = bareFrame(msg.header.frame_id);
-  const std::string label = !given.empty()   ? given
-                            : !frame.empty() ? frame
-                                             : bareFrame(m.connection->topic);
-  std::optional<CPose3D> pose = frames_.in(frame, o_.base_frame);
-  if (!pose) {
-    const auto it = o_.sensor_poses.find(label);
-    pose = it != o_.sensor_poses.end() ? it->second : CPose3D();
-    ++notes_->scans_no_tf;
-  }
-  auto o = scanFromRos(msg, label, *pose);
+  const auto [label, pose] =
+      placed(msg.header.frame_id, given, m.connection->topic, notes_->scans_no_tf);
+  auto o = scanFromRos(msg, label, pose);
   if (msg.header.stamp.isZero()) o->timestamp = fromRosTime(::ros::Time(m.sec, m.nsec));
   ++notes_->scans;
+  return o;
+}
+
+// A cloud without float x, y, z is skipped (counted as a topic not read).
+CObservation::Ptr BagSource::cloud(const BagMessage& m, const std::string& given) {
+  const auto msg = decode<sensor_msgs::PointCloud2>(m);
+  size_t no_tf = 0;
+  const auto [label, pose] = placed(msg.header.frame_id, given, m.connection->topic, no_tf);
+  auto o = cloudFromRos(msg, label, pose);
+  if (!o) return ++notes_->skipped, nullptr;
+  if (msg.header.stamp.isZero()) o->timestamp = fromRosTime(::ros::Time(m.sec, m.nsec));
+  notes_->clouds_no_tf += no_tf;
+  ++notes_->clouds;
   return o;
 }
 

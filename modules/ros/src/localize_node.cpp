@@ -9,6 +9,7 @@
 #include <carenav/sim/world.h>
 
 #include "msg_convert.h"
+#include "node_common.h"
 
 #include <geometry_msgs/PoseArray.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
@@ -137,11 +138,7 @@ void runLocalizeNode(const LocalizeNodeOptions& o) {
   {
     LocalizeNode node(o, loc, *lidar);
     if (!o.quiet) std::cerr << "carenav ros localize: " << loc.particleCount() << " particles\n";
-    const ::ros::WallTime wall0 = ::ros::WallTime::now();
-    while (::ros::ok() && !(o.stop && o.stop->load())) {
-      if (o.duration > 0 && (::ros::WallTime::now() - wall0).toSec() >= o.duration) break;
-      ::ros::getGlobalCallbackQueue()->callAvailable(::ros::WallDuration(0.1));
-    }
+    spinNode(o.duration, o.stop);
   }
   ::ros::shutdown();
 }

@@ -5,10 +5,16 @@
 #include <geometry_msgs/Quaternion.h>
 #include <geometry_msgs/Transform.h>
 #include <mrpt/core/Clock.h>
+#include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/poses/CPose3D.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <ros/time.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud2.h>
 
 #include <string>
 
@@ -31,6 +37,30 @@ mrpt::obs::CObservation2DRangeScan::Ptr scanFromRos(const sensor_msgs::LaserScan
 /** An MRPT scan as a LaserScan in `frame` (invalid ranges: +inf). */
 sensor_msgs::LaserScan scanToRos(const mrpt::obs::CObservation2DRangeScan& s,
                                  const std::string& frame);
+
+/** A PointCloud2 with float x, y, z fields in the sensor's body frame (x
+ *  forward, y left, z up) as a depth observation of points (points with a
+ *  NaN or infinite coordinate left out, each with its pixel: column, row)
+ *  at `sensor_pose` on the robot;
+ *  nullptr when it has no float x, y, z or its data is shorter than its
+ *  size says. */
+mrpt::obs::CObservation3DRangeScan::Ptr cloudFromRos(const sensor_msgs::PointCloud2& m,
+                                                     const std::string& label,
+                                                     const mrpt::poses::CPose3D& sensor_pose);
+/** A depth image (16UC1 / mono16 in mm, 32FC1 in m; depth along the optical
+ *  axis, 0 or NaN: no return) with its camera's intrinsics (K of
+ *  CameraInfo) as a depth observation with a range image; `sensor_pose` is
+ *  the camera's body-frame pose on the robot (x forward). nullptr for other
+ *  encodings, big-endian data, a short buffer or no intrinsics. */
+mrpt::obs::CObservation3DRangeScan::Ptr depthFromRos(const sensor_msgs::Image& img,
+                                                     const sensor_msgs::CameraInfo& info,
+                                                     const std::string& label,
+                                                     const mrpt::poses::CPose3D& sensor_pose);
+
+/** An MRPT grid as a ROS map in `frame`: -1 unknown (p = 0.5), else
+ *  100 x p(occupied), rows along y from the grid's lower corner. */
+nav_msgs::OccupancyGrid gridToRos(const mrpt::maps::COccupancyGridMap2D& g,
+                                  const std::string& frame, const ::ros::Time& stamp);
 
 /** "/a/b" -> "a/b": tf frame names compared without a leading slash. */
 std::string bareFrame(const std::string& f);

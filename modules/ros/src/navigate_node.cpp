@@ -11,6 +11,7 @@
 #include <carenav/sim/world.h>
 
 #include "msg_convert.h"
+#include "node_common.h"
 
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
@@ -27,7 +28,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 namespace carenav::ros {
 
@@ -42,13 +42,22 @@ mrpt::maps::COccupancyGridMap2D loadMap(const NavigateNodeOptions& o) {
   return io::loadGridMap(o.map);
 }
 
+/** A place or room of the map's places file (as `carenav navigate --goal
+ *  NAME`); throws InputError for an unknown name or a bad places file. */
+navigation::SessionGoal placeGoal(const NavigateNodeOptions& o,
+                                  const mrpt::maps::COccupancyGridMap2D& grid,
+                                  const std::string& name) {
+  const std::string places = places::placesPathForMap(!o.world.empty() ? o.world : o.map);
+  const places::Goal g = places::resolveGoal(places::readPlacesFile(places), grid, name);
+  return {TPose2D{g.x, g.y, mrpt::DEG2RAD(g.heading_deg)},
+          g.place.empty() ? g.room : g.room + "/" + g.place};
+}
+
 std::optional<TPose2D> goalFromText(const NavigateNodeOptions& o,
                                     const mrpt::maps::COccupancyGridMap2D& grid) {
   if (o.goal.empty()) return std::nullopt;
   if (auto g = navigation::parsePoseText(o.goal)) return g;
-  const std::string places = places::placesPathForMap(!o.world.empty() ? o.world : o.map);
-  const places::Goal g = places::resolveGoal(places::readPlacesFile(places), grid, o.goal);
-  return TPose2D{g.x, g.y, mrpt::DEG2RAD(g.heading_deg)};
+  return placeGoal(o, grid, o.goal).pose;
 }
 
 class NavigateNode {
@@ -60,6 +69,7 @@ class NavigateNode {
     subscribeOthers();
     odom_ = nh_.subscribe("odom", 20, &NavigateNode::onOdom, this);
     goal_ = nh_.subscribe("move_base_simple/goal", 2, &NavigateNode::onGoal, this);
+    place_ = pnh_.subscribe("goal_place", 2, &NavigateNode::onGoalPlace, this);
     if (s.walker()) intent_ = nh_.subscribe("intent", 5, &NavigateNode::onIntent, this);
     if (o.external_pose) amcl_ = nh_.subscribe("amcl_pose", 5, &NavigateNode::onPose, this);
     cmd_ = nh_.advertise<geometry_msgs::Twist>("cmd_vel", 5);
@@ -86,6 +96,8 @@ class NavigateNode {
   void onPoints(const SensorParams& sp, const sensor_msgs::PointCloud2& m);
   void onOdom(const nav_msgs::Odometry& m);
   void onGoal(const geometry_msgs::PoseStamped& m);
+  void onGoalPlace(const std_msgs::String& m);
+  void acceptGoal(const navigation::SessionGoal& g);
   /** A localiser's pose (amcl_pose): the navigator's map pose from now on
    *  (it follows odometry from there). */
   void onPose(const geometry_msgs::PoseWithCovarianceStamped& m) {
@@ -104,7 +116,7 @@ class NavigateNode {
   const NavigateNodeOptions& o_;
   NavigationSession& s_;
   ::ros::NodeHandle nh_, pnh_;
-  ::ros::Subscriber scan_, odom_, goal_, intent_, amcl_;
+  ::ros::Subscriber scan_, odom_, goal_, place_, intent_, amcl_;
   std::vector<::ros::Subscriber> others_;  // scan_LABEL, points[_LABEL]
   ::ros::Publisher cmd_, path_, status_, pose_, tf_;
   std::optional<SensorParams> lidar_;
@@ -160,29 +172,9 @@ void NavigateNode::onOtherScan(const SensorParams& sp, const sensor_msgs::LaserS
 // pose places it) as a depth observation for perception.
 void NavigateNode::onPoints(const SensorParams& sp, const sensor_msgs::PointCloud2& m) {
   if (!have_odom_) return;
-  int off[3] = {-1, -1, -1};
-  for (const auto& f : m.fields)
-    for (int i = 0; i < 3; ++i)
-      if (f.name == std::string(1, "xyz"[i]) && f.datatype == sensor_msgs::PointField::FLOAT32)
-        off[i] = static_cast<int>(f.offset);
-  if (off[0] < 0 || off[1] < 0 || off[2] < 0 || m.point_step < 12) return;
-  auto o = mrpt::obs::CObservation3DRangeScan::Create();
-  o->sensorLabel = sp.label;
-  o->timestamp = fromRosTime(m.header.stamp);
-  o->sensorPose = mrpt::poses::CPose3D(sp.x, sp.y, sp.z, mrpt::DEG2RAD(sp.yaw),
-                                       mrpt::DEG2RAD(sp.pitch), mrpt::DEG2RAD(sp.roll));
-  o->hasPoints3D = true;
-  const size_t n = size_t{m.width} * m.height;
-  if (m.data.size() < n * m.point_step) return;
-  for (size_t i = 0; i < n; ++i) {
-    float v[3];
-    for (int k = 0; k < 3; ++k) std::memcpy(&v[k], &m.data[i * m.point_step + off[k]], 4);
-    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) continue;
-    o->points3D_x.push_back(v[0]);
-    o->points3D_y.push_back(v[1]);
-    o->points3D_z.push_back(v[2]);
-  }
-  s_.observation(o, odom_pose_, t(m.header.stamp));
+  const mrpt::poses::CPose3D pose(sp.x, sp.y, sp.z, mrpt::DEG2RAD(sp.yaw), mrpt::DEG2RAD(sp.pitch),
+                                  mrpt::DEG2RAD(sp.roll));
+  if (auto o = cloudFromRos(m, sp.label, pose)) s_.observation(o, odom_pose_, t(m.header.stamp));
 }
 
 void NavigateNode::onOdom(const nav_msgs::Odometry& m) {
@@ -195,11 +187,27 @@ void NavigateNode::onOdom(const nav_msgs::Odometry& m) {
 
 void NavigateNode::onGoal(const geometry_msgs::PoseStamped& m) {
   if (s_.walker()) return say("goal ignored: the walker follows its user");
-  const TPose2D g{m.pose.position.x, m.pose.position.y, yawOf(m.pose.orientation)};
+  acceptGoal({{m.pose.position.x, m.pose.position.y, yawOf(m.pose.orientation)}, ""});
+}
+
+// A place name: resolved as `navigate --goal NAME`; an unknown one (or no
+// map, no places file) is a warning and leaves the goal as it was.
+void NavigateNode::onGoalPlace(const std_msgs::String& m) {
+  if (s_.walker()) return say("goal ignored: the walker follows its user");
+  if (!s_.setup().map) return say("warning: goal place '" + m.data + "': no map (--map, --world)");
+  try {
+    acceptGoal(placeGoal(o_, *s_.setup().map, m.data));
+  } catch (const InputError& e) {
+    say(std::string("warning: goal place '") + m.data + "': " + e.what() + "; goal unchanged");
+  }
+}
+
+void NavigateNode::acceptGoal(const navigation::SessionGoal& g) {
   const TPose2D here = s_.navigator().mapPose();
-  const bool ok = s_.setGoals({{g, ""}}, false, 0, {here.x, here.y});
+  const bool ok = s_.setGoals({g}, false, 0, {here.x, here.y});
   route_sent_ = false;
-  say(ok ? "goal accepted" : "goal accepted, no route yet (replanning)");
+  const std::string what = g.label.empty() ? "goal accepted" : "goal accepted: " + g.label;
+  say(ok ? what : what + ", no route yet (replanning)");
 }
 
 void NavigateNode::say(const std::string& text) {
@@ -314,12 +322,7 @@ std::string NavigateNode::run() {
 }  // namespace
 
 navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o) {
-  auto setup = navigation::sessionSetup(o.profile, o.sets, o.plugin);  // bad input: before ROS
-  initRosNode("carenav_navigate", o.ros_args);
-  if (auto sets = privateParamOverrides(); !sets.empty()) {
-    sets.insert(sets.end(), o.sets.begin(), o.sets.end());
-    setup = navigation::sessionSetup(o.profile, sets, o.plugin);
-  }
+  auto setup = startNode("carenav_navigate", o.profile, o.sets, o.plugin, o.ros_args);
   std::optional<mrpt::maps::COccupancyGridMap2D> grid;
   if (!o.map.empty() || !o.world.empty()) grid = loadMap(o);
   setup.name = "ros";

@@ -1,6 +1,9 @@
 #include <carenav/common/errors.h>
 #include <carenav/ros/nodes.h>
 
+#include "node_common.h"
+
+#include <ros/callback_queue.h>
 #include <ros/master.h>
 #include <ros/ros.h>
 
@@ -67,7 +70,7 @@ std::string overrideFromParam(const std::string& relative_name, const std::strin
   return section + "." + relative_name.substr(last + 1) + "=" + value;
 }
 
-std::vector<std::string> privateParamOverrides() {
+std::vector<std::string> privateParamOverrides(const std::vector<std::string>& node_keys) {
   std::vector<std::string> names, out;
   if (!::ros::param::getParamNames(names)) return out;
   const std::string prefix = ::ros::this_node::getName() + "/";
@@ -77,6 +80,7 @@ std::vector<std::string> privateParamOverrides() {
     XmlRpc::XmlRpcValue v;
     if (!::ros::param::get(n, v)) continue;
     const std::string rel = n.substr(prefix.size());
+    if (std::find(node_keys.begin(), node_keys.end(), rel) != node_keys.end()) continue;
     std::string text;
     try {
       text = paramText(v);
@@ -90,6 +94,27 @@ std::vector<std::string> privateParamOverrides() {
     out.push_back(set);
   }
   return out;
+}
+
+navigation::SessionSetup startNode(const std::string& node, const std::string& profile,
+                                   const std::vector<std::string>& sets, const std::string& plugin,
+                                   const std::vector<std::string>& ros_args,
+                                   const std::vector<std::string>& node_keys) {
+  auto setup = navigation::sessionSetup(profile, sets, plugin);
+  initRosNode(node, ros_args);
+  if (auto params = privateParamOverrides(node_keys); !params.empty()) {
+    params.insert(params.end(), sets.begin(), sets.end());
+    setup = navigation::sessionSetup(profile, params, plugin);
+  }
+  return setup;
+}
+
+void spinNode(double duration, const std::atomic<bool>* stop) {
+  const ::ros::WallTime wall0 = ::ros::WallTime::now();
+  while (::ros::ok() && !(stop && stop->load())) {
+    if (duration > 0 && (::ros::WallTime::now() - wall0).toSec() >= duration) break;
+    ::ros::getGlobalCallbackQueue()->callAvailable(::ros::WallDuration(0.1));
+  }
 }
 
 }  // namespace carenav::ros

@@ -21,6 +21,10 @@ struct BagReadOptions {
    *  observation's sensor label; default: the scan's frame_id, else the
    *  topic without its leading '/'). Empty: every LaserScan topic. */
   std::vector<std::string> scans;
+  /** sensor_msgs/PointCloud2 topics (float x, y, z in the frame_id's
+   *  frame), each optionally "TOPIC=LABEL" as for scans; empty: every
+   *  PointCloud2 topic; {"none"}: none. */
+  std::vector<std::string> clouds;
   /** Odometry: a nav_msgs/Odometry topic, "tf" (the odom_frame ->
    *  base_frame transform of /tf), "none", or "" (the first Odometry topic
    *  of the bag, else tf). */
@@ -40,11 +44,15 @@ struct BagReadNotes {
   size_t odometry = 0;                        ///< odometry readings given out
   size_t skipped = 0;                         ///< messages of topics not read
   size_t scans_no_tf = 0;                     ///< scans whose frame tf did not place on the robot
+  size_t clouds = 0;                          ///< point clouds given out
+  size_t clouds_no_tf = 0;                    ///< clouds whose frame tf did not place
   std::map<std::string, std::string> topics;  ///< topic -> type, as met
 };
 
-/** A bag as an observation source (rawlog_formats.h): CObservation2DRangeScan
- *  and CObservationOdometry (label "odometry") in the bag's order, stamped
+/** A bag as an observation source (rawlog_formats.h): CObservation2DRangeScan,
+ *  CObservation3DRangeScan (clouds as points in the sensor frame, the
+ *  sensor pose from tf) and CObservationOdometry (label "odometry") in the
+ *  bag's order, stamped
  *  with the messages' header stamps. Throws InputError when the file is not
  *  a bag; a bag broken further on throws io::RawlogError from next() naming
  *  the file, the message count and the byte. `notes` (optional) is filled

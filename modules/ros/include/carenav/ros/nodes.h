@@ -94,6 +94,58 @@ struct LocalizeNodeOptions {
 };
 void runLocalizeNode(const LocalizeNodeOptions& o);
 
+/** `carenav ros perceive`: carenav's perception pipeline (that of `carenav
+ *  perceive` and of the navigation session) on a depth camera's frames.
+ *  Subscribes `points` (sensor_msgs/PointCloud2 in the camera's body frame:
+ *  x forward, y left, z up), `depth/image` + `depth/camera_info`
+ *  (sensor_msgs/Image 16UC1 mm or 32FC1 m, and its CameraInfo) and, to
+ *  move the local grid, `odom`; publishes `local_grid`
+ *  (nav_msgs/OccupancyGrid, the robot-centred grid in the odometry frame)
+ *  and `virtual_scan` (sensor_msgs/LaserScan, 360 degrees in the base frame:
+ *  per bearing the first occupied cell of the grid, so stairs down, gutters
+ *  and outlets are in it as well as obstacles). */
+struct PerceiveNodeOptions {
+  std::string profile;
+  std::vector<std::string> sets;
+  std::string method = "rrt-gpd";  ///< rrt-gpd | ransac | height-band (perception::Method)
+  /** The depth camera ([sensor.LABEL]: its pose on the robot); empty: the
+   *  profile's [perception] sensor, else its first depth camera. */
+  std::string sensor;
+  std::string sensor_pose;  ///< "x,y,z,yaw,pitch,roll" (m, deg) instead of the profile's
+  double duration = 0;      ///< s; 0: until stopped
+  std::string odom_frame = "odom", base_frame = "base_link";
+  std::vector<std::string> ros_args;
+  const std::atomic<bool>* stop = nullptr;
+  bool quiet = false;
+};
+/** Runs until stopped or `duration`; returns the number of frames processed. */
+size_t runPerceiveNode(const PerceiveNodeOptions& o);
+
+/** `carenav ros slam`: a SLAM back end of `carenav slam` (slam::createMapper)
+ *  fed live. Subscribes `scan` (sensor_msgs/LaserScan, the profile's first
+ *  lidar2d, placed by its pose), `odom` (nav_msgs/Odometry; without any, the
+ *  `odom -> base_link` transform of `tf`) and `~save` (std_msgs/Empty);
+ *  publishes `map` (nav_msgs/OccupancyGrid, latched, every `map_every`
+ *  scans inserted in the map) and `map -> odom` on `tf`. At the end and on
+ *  each `~save` it writes the outputs of `carenav slam` to `out_dir`. */
+struct SlamNodeOptions {
+  std::string profile;
+  std::vector<std::string> sets;
+  std::string method;   ///< icp | icp-graph | rbpf; empty: the profile's [slam] method
+  std::string out_dir;  ///< map.simplemap, map.gridmap.gz, map.yaml/.pgm, map.png, ...
+  /** Scans inserted in the map (keyframes) between two `map` messages; 0:
+   *  the `~map_every` parameter, else 5. */
+  int map_every = 0;
+  double duration = 0;  ///< s; 0: until stopped
+  std::string odom_frame = "odom", base_frame = "base_link", map_frame = "map";
+  std::vector<std::string> ros_args;
+  const std::atomic<bool>* stop = nullptr;
+  bool quiet = false;
+};
+/** Runs until stopped or `duration`, then writes the outputs; returns the
+ *  number of scans mapped. Throws InputError when none was (nothing to write). */
+size_t runSlamNode(const SlamNodeOptions& o);
+
 /** ros::init with the node's name and ROS arguments (once per process);
  *  throws InputError when the master cannot be reached within `wait_s`. */
 void initRosNode(const std::string& name, const std::vector<std::string>& ros_args,
@@ -103,7 +155,8 @@ void initRosNode(const std::string& name, const std::vector<std::string>& ros_ar
  *  -> "navigation.v_max=VALUE", `~sensor/laser/x` -> "sensor.laser.x=VALUE"
  *  (every '/' but the last becomes '.'; ROS names have no dots). Call after
  *  initRosNode; command-line --set values go after these and win. */
-std::vector<std::string> privateParamOverrides();
+/** `node_keys`: the node's own parameters (e.g. `map_every`), not profile keys, left out. */
+std::vector<std::string> privateParamOverrides(const std::vector<std::string>& node_keys = {});
 
 /** "section.key=value" from a parameter's name below the node's namespace
  *  and its value as text (exposed for tests); "" for a name without a

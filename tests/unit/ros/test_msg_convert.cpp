@@ -1,0 +1,96 @@
+// The message conversions of the ROS nodes (modules/ros/src/msg_convert.h):
+// depth images with their CameraInfo and body-frame clouds as the depth
+// observations carenav's perception pipeline reads.
+#include <carenav/perception/cloud.h>
+
+#include "msg_convert.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace {
+
+using carenav::ros::cloudFromRos;
+using carenav::ros::depthFromRos;
+
+sensor_msgs::CameraInfo camera(double f, double cx, double cy) {
+  sensor_msgs::CameraInfo c;
+  c.K = {f, 0, cx, 0, f, cy, 0, 0, 1};
+  return c;
+}
+
+TEST(RosMsgConvert, DepthImageMillimetresUnprojectsForward) {
+  sensor_msgs::Image img;
+  img.encoding = "16UC1";
+  img.width = 3;
+  img.height = 3;
+  img.step = 6;
+  std::vector<uint16_t> mm(9, 2000);
+  mm[0] = 0;  // no return
+  img.data.resize(18);
+  std::memcpy(img.data.data(), mm.data(), 18);
+  const mrpt::poses::CPose3D pose(0.1, 0, 0.5, 0, 0, 0);
+  const auto o = depthFromRos(img, camera(2, 1, 1), "cam", pose);
+  ASSERT_TRUE(o);
+  const auto c = carenav::perception::cloudFromObservation(*o);
+  ASSERT_TRUE(c);
+  ASSERT_EQ(c->points.size(), 9u);
+  EXPECT_EQ(c->height, 3u);
+  EXPECT_FALSE(carenav::perception::validPoint(c->points[0]));
+  const auto& centre = c->points[4];  // the optical axis: 2 m straight ahead
+  EXPECT_NEAR(centre.x, 2.1, 1e-4);
+  EXPECT_NEAR(centre.y, 0, 1e-4);
+  EXPECT_NEAR(centre.z, 0.5, 1e-4);
+  EXPECT_NEAR(c->points[3].y, 1.0, 1e-4) << "column 0 is to the left (y > 0)";
+  EXPECT_NEAR(c->points[1].z, 1.5, 1e-4) << "row 0 is above (z > 0)";
+}
+
+TEST(RosMsgConvert, DepthImageMetresAndRefusals) {
+  sensor_msgs::Image img;
+  img.encoding = "32FC1";
+  img.width = 2;
+  img.height = 1;
+  img.step = 8;
+  const float m[2] = {1.5f, std::numeric_limits<float>::quiet_NaN()};
+  img.data.resize(8);
+  std::memcpy(img.data.data(), m, 8);
+  const auto o = depthFromRos(img, camera(1, 0.5, 0), "cam", {});
+  ASSERT_TRUE(o);
+  EXPECT_EQ(o->rangeImage(0, 0), 1500);
+  EXPECT_EQ(o->rangeImage(0, 1), 0);
+  img.encoding = "rgb8";
+  EXPECT_FALSE(depthFromRos(img, camera(1, 0.5, 0), "cam", {}));
+  img.encoding = "32FC1";
+  EXPECT_FALSE(depthFromRos(img, sensor_msgs::CameraInfo(), "cam", {})) << "no intrinsics";
+  img.data.resize(4);
+  EXPECT_FALSE(depthFromRos(img, camera(1, 0.5, 0), "cam", {})) << "short data";
+}
+
+TEST(RosMsgConvert, CloudDropsNonFinitePoints) {
+  sensor_msgs::PointCloud2 m;
+  m.width = 2;
+  m.height = 1;
+  m.point_step = 12;
+  for (int i = 0; i < 3; ++i) {
+    sensor_msgs::PointField f;
+    f.name = std::string(1, "xyz"[i]);
+    f.offset = 4 * i;
+    f.datatype = sensor_msgs::PointField::FLOAT32;
+    f.count = 1;
+    m.fields.push_back(f);
+  }
+  const float v[6] = {1, 2, 3, std::numeric_limits<float>::quiet_NaN(), 0, 0};
+  m.data.resize(24);
+  std::memcpy(m.data.data(), v, 24);
+  const auto o = cloudFromRos(m, "cam", {});
+  ASSERT_TRUE(o);
+  ASSERT_EQ(o->points3D_x.size(), 1u);
+  EXPECT_EQ(o->points3D_z[0], 3.f);
+  m.fields.pop_back();
+  EXPECT_FALSE(cloudFromRos(m, "cam", {})) << "no z field";
+}
+
+}  // namespace
