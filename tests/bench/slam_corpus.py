@@ -9,7 +9,7 @@ log's reference poses (`carenav eval`: ATE after SE(2) alignment, RPE per
 settings for a time and accuracy baseline. Then (--localize) it localises
 each log's rawlog of another odometry seed on the map made from the first,
 from a global start and from the known start, as `carenav localize` and
-(--mrpt) MRPT's pf-localization.
+(--mrpt-loc) MRPT's pf-localization.
 
 Prints one markdown table per part and writes OUT/results.jsonl, OUT/maps/
 (each run's map.png beside the publishers' picture) and OUT/index.md.
@@ -18,7 +18,7 @@ on a loaded machine; ratios are carenav / MRPT on the same input.
 
   tests/bench/slam_corpus.py --carenav build/apps/carenav/carenav --out /tmp/corpus \
       [--logs intel,csail] [--inputs laser,odo1,odo2,odo3] [--jobs 2] [--mrpt] \
-      [--localize] [--set slam.key=value ...]
+      [--localize [--mrpt-loc]] [--reuse] [--set section.key=value ...]
 """
 import argparse
 import concurrent.futures as cf
@@ -239,7 +239,7 @@ def loc_job(a, log, map_input, loc_input, mode, work):
     if rc != 0:
         return r
     r.update(track_stats(os.path.join(out, "track.tum"), ref, os.path.join(out, "summary.json")))
-    if a.mrpt:
+    if a.mrpt_loc:
         r.update(mrpt_loc(a, rawlog, slam_out, ref, mode, os.path.join(work, "mrpt-loc",
                                                                       f"{log}-{mode}")))
     return r
@@ -379,7 +379,10 @@ def main():
     ap.add_argument("--inputs", default="laser,odo1,odo2,odo3")
     ap.add_argument("--method", default="icp-graph")
     ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--mrpt", action="store_true", help="MRPT icp-slam / pf-localization too")
+    ap.add_argument("--mrpt", action="store_true", help="MRPT's icp-slam on the same rawlogs too")
+    ap.add_argument("--mrpt-loc", action="store_true",
+                    help="MRPT's pf-localization on the same maps and rawlogs too (slow: "
+                         "40000 particles from a global start)")
     ap.add_argument("--mrpt-limit", type=float, default=600,
                     help="CPU seconds after which an MRPT baseline run is stopped (shown as a "
                          "lower bound of its time)")
@@ -389,7 +392,7 @@ def main():
     ap.add_argument("--set", action="append", default=[], help="profile override (repeatable)")
     a = ap.parse_args()
     a.carenav = os.path.abspath(a.carenav)
-    if a.mrpt and not shutil.which("icp-slam"):
+    if (a.mrpt or a.mrpt_loc) and not shutil.which("icp-slam"):
         sys.exit("--mrpt: icp-slam not found (Debian package mrpt-apps)")
     logs = [l for l in a.logs.split(",") if l] or sorted(
         f[: -len("-corrected.log.gz")] for f in os.listdir(a.data) if f.endswith("-corrected.log.gz"))

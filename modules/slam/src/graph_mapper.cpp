@@ -16,6 +16,7 @@
 #include <mrpt/graphs/CNetworkOfPoses.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/poses/CPoint2D.h>
 #include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/poses/CPosePDFGaussian.h>
 #include <mrpt/poses/CPosePDFGaussianInf.h>
@@ -48,8 +49,15 @@ constexpr double kPriorGate = 16.27;
 struct Keyframe {
   CPose2D pose;  // current estimate, world frame
   mrpt::obs::CObservation2DRangeScan::Ptr scan;
-  std::shared_ptr<CSimplePointsMap> points;  // in the keyframe's frame
-  bool fixed = false;                        // from a resumed map: not optimised
+  std::shared_ptr<CSimplePointsMap> points;                 // in the keyframe's frame
+  bool fixed = false;                                       // from a resumed map: not optimised
+  std::shared_ptr<const std::vector<LineIcp::Line>> lines;  // of `points`, same frame
+};
+
+/** The points and lines of keyframes [from, to] in one frame. */
+struct LineSet {
+  CSimplePointsMap points;
+  std::vector<LineIcp::Line> lines;
 };
 
 struct ScanRecord {
@@ -399,7 +407,7 @@ class GraphMapper : public Mapper {
   void addKeyframe(const mrpt::obs::CObservation2DRangeScan::Ptr& scan,
                    const std::shared_ptr<CSimplePointsMap>& pts, bool matched) {
     const size_t id = keyframes_.size();
-    keyframes_.push_back({pose_, scan, pts, false});
+    keyframes_.push_back({pose_, scan, pts, false, linesOf(*pts)});
     graph_.nodes[id] = pose_;
     if (id > 0) {
       const Keyframe& prev = keyframes_[id - 1];
@@ -407,12 +415,40 @@ class GraphMapper : public Mapper {
       graph_.insertEdge(id - 1, id,
                         matched ? edgeFromCov(pose_ - prev.pose, last_cov_)
                                 : edge(pose_ - prev.pose, 0.3, 5.0 * kDeg));
-      chain_.add(PoseGaussian(pose_ - prev.pose,
-                              matched ? flooredCov(last_cov_) : diagCov(0.3, 5.0 * kDeg)));
+      const PoseGaussian step(pose_ - prev.pose,
+                              matched ? flooredCov(last_cov_) : diagCov(0.3, 5.0 * kDeg));
+      chain_.add(step);
+      drift_ = compose(drift_, step);
       const bool found = tryLoopClosures(id);
       if (cfg_.slam.loop_consistency ? resolveClosures(id, false) : found) optimise();
     }
     rebuildSubmap();
+  }
+
+  std::shared_ptr<const std::vector<LineIcp::Line>> linesOf(const CSimplePointsMap& pts) const {
+    if (!cfg_.slam.use_odometry) return nullptr;
+    return std::make_shared<const std::vector<LineIcp::Line>>(
+        LineIcp::fitLines(pts, LineIcp::Parameters{}));
+  }
+
+  /** Points and lines of keyframes [from, to] in the frame whose pose is
+   *  `frame` (world frame: CPose2D()). */
+  LineSet linesAround(const CPose2D& frame, size_t from, size_t to) const {
+    LineSet set;
+    for (size_t i = from; i <= to && i < keyframes_.size(); ++i) {
+      const Keyframe& kf = keyframes_[i];
+      if (!kf.lines) continue;
+      const CPose2D t = kf.pose - frame;
+      const auto& xs = kf.points->getPointsBufferRef_x();
+      const auto& ys = kf.points->getPointsBufferRef_y();
+      for (size_t q = 0; q < xs.size(); ++q) {
+        const auto w = t + mrpt::poses::CPoint2D(xs[q], ys[q]);
+        set.points.insertPointFast(static_cast<float>(w.x()), static_cast<float>(w.y()), 0);
+        set.lines.push_back((*kf.lines)[q].transformed(t));
+      }
+    }
+    set.points.mark_as_modified();
+    return set;
   }
 
   /** Points of keyframes [from, to] in the frame of keyframe `ref`. */
@@ -427,12 +463,23 @@ class GraphMapper : public Mapper {
     return m;
   }
 
+  /** How far a loop closure is searched: three standard deviations of the
+   *  position drift accumulated since the last closure (the chain of
+   *  keyframe steps with their covariances), at least loop_search_radius, at
+   *  most loop_search_max. */
+  double loopSearchRadius() const {
+    const auto& s = cfg_.slam;
+    return std::clamp(3 * maxStdXY(drift_.cov), s.loop_search_radius,
+                      std::max(s.loop_search_radius, s.loop_search_max));
+  }
+
   bool tryLoopClosures(size_t k) {
     const auto& s = cfg_.slam;
+    const double radius = loopSearchRadius();
     std::vector<std::pair<double, size_t>> cands;
     for (size_t j = 0; j + static_cast<size_t>(s.loop_min_separation) < k; ++j) {
       const double d = (keyframes_[j].pose - keyframes_[k].pose).norm();
-      if (d <= s.loop_search_radius) cands.emplace_back(d, j);
+      if (d <= radius) cands.emplace_back(d, j);
     }
     std::sort(cands.begin(), cands.end());
     if (cands.size() > kLoopTries) cands.resize(kLoopTries);
@@ -453,10 +500,11 @@ class GraphMapper : public Mapper {
       // Point-to-point ICP found the basin from the drifted guess; point to
       // line pins it down without the pull along walls sampled differently.
       LineIcp line{LineIcp::Parameters{}};
-      line.setReference(ref);
+      LineSet lref = linesAround(keyframes_[j].pose, from, j + kLoopNeighbours);
+      line.setReference(lref.points, std::move(lref.lines));
       const LineIcp::Result refined = line.align(*keyframes_[k].points, rel);
       if ((refined.pose - rel).norm() < 0.2 && refined.inliers >= 0.3) rel = refined.pose;
-      if ((rel - guess).norm() > s.loop_max_correction) continue;
+      if ((rel - guess).norm() > std::max(s.loop_max_correction, radius)) continue;
       // ICP's goodness counts the scan's points that found a partner; a
       // keyframe seen again from another heading shares only part of its view
       // with the old one, so a right match can score 0.6 (the simulated SENA
@@ -483,6 +531,7 @@ class GraphMapper : public Mapper {
       graph_.insertEdge(j, k, edgeFromCov(rel, cov));
       loop_edges_.emplace_back(j, k);
       ++stats_.loop_closures;
+      drift_ = PoseGaussian();  // anchored to the old map again
     }
     return any;
   }
@@ -545,6 +594,7 @@ class GraphMapper : public Mapper {
         graph_.insertEdge(c.m.from, c.m.to, e);
         loop_edges_.emplace_back(c.m.from, c.m.to);
         ++stats_.loop_closures;
+        drift_ = PoseGaussian();
         c.in_graph = true;
         any = true;
       }
@@ -702,7 +752,10 @@ class GraphMapper : public Mapper {
       submap_.insertAnotherMap(&p, mrpt::poses::CPose3D());
     }
     if (!cfg_.slam.use_odometry || !have_odometry_) correlative_.setReference(submap_);
-    if (cfg_.slam.use_odometry) line_icp_.setReference(submap_);
+    if (cfg_.slam.use_odometry) {
+      LineSet set = linesAround(CPose2D(), from, n - 1);
+      line_icp_.setReference(set.points, std::move(set.lines));
+    }
   }
 
   void resume(const mrpt::maps::CSimpleMap& map) {
@@ -716,7 +769,7 @@ class GraphMapper : public Mapper {
       pts->insertObservation(*scan);
       const CPose2D p(pdf->getMeanVal());
       const size_t id = keyframes_.size();
-      keyframes_.push_back({p, scan, pts, true});
+      keyframes_.push_back({p, scan, pts, true, linesOf(*pts)});
       graph_.nodes[id] = p;
       if (id > 0) {
         graph_.insertEdge(id - 1, id, edge(p - keyframes_[id - 1].pose, 0.01, 0.2 * kDeg));
@@ -738,6 +791,7 @@ class GraphMapper : public Mapper {
   mrpt::obs::CObservation2DRangeScan::Ptr current_scan_;
   std::vector<std::pair<size_t, size_t>> loop_edges_;
   OdometryChain chain_;                // keyframe to keyframe, as first matched
+  PoseGaussian drift_;                 // the chain since the last loop closure
   std::vector<Candidate> candidates_;  // closures of the last keyframes
   size_t next_candidate_id_ = 0;
   std::map<std::pair<size_t, size_t>, bool> consistent_;  // by candidate ids

@@ -11,29 +11,54 @@ namespace carenav::slam {
 
 using mrpt::poses::CPose2D;
 
-void LineIcp::setReference(const mrpt::maps::CSimplePointsMap& ref) {
-  ref_ = ref;
-  ref_.mark_as_modified();
-  line_.assign(ref_.size(), Line{});
-  lines_ = 0;
-  if (ref_.size() < p_.normal_neighbours) return;
-  for (size_t i = 0; i < ref_.size(); ++i) fitLine(i);
+LineIcp::Line LineIcp::Line::transformed(const CPose2D& frame) const {
+  const double c = std::cos(frame.phi()), s = std::sin(frame.phi());
+  Line l;
+  l.nx = static_cast<float>(c * nx - s * ny);
+  l.ny = static_cast<float>(s * nx + c * ny);
+  l.mx = static_cast<float>(frame.x() + c * mx - s * my);
+  l.my = static_cast<float>(frame.y() + s * mx + c * my);
+  return l;
 }
 
-/** The line through reference point i's neighbours: their mean and the
+std::vector<LineIcp::Line> LineIcp::fitLines(const mrpt::maps::CSimplePointsMap& pts,
+                                             const Parameters& p) {
+  std::vector<Line> out(pts.size());
+  if (pts.size() < p.normal_neighbours) return out;
+  const auto& xs = pts.getPointsBufferRef_x();
+  const auto& ys = pts.getPointsBufferRef_y();
+  for (size_t i = 0; i < pts.size(); ++i) out[i] = fitLine(pts, xs[i], ys[i], p);
+  return out;
+}
+
+void LineIcp::setReference(const mrpt::maps::CSimplePointsMap& ref) {
+  setReference(ref, fitLines(ref, p_));
+}
+
+void LineIcp::setReference(const mrpt::maps::CSimplePointsMap& ref, std::vector<Line> lines) {
+  ref_ = ref;
+  ref_.mark_as_modified();
+  line_ = std::move(lines);
+  line_.resize(ref_.size());
+  lines_ = 0;
+  for (const Line& l : line_) lines_ += l.valid();
+}
+
+/** The line through the neighbours of (x, y) in `pts`: their mean and the
  *  direction of least spread (principal components of their scatter). */
-void LineIcp::fitLine(size_t i) {
-  const auto& xs = ref_.getPointsBufferRef_x();
-  const auto& ys = ref_.getPointsBufferRef_y();
+LineIcp::Line LineIcp::fitLine(const mrpt::maps::CSimplePointsMap& pts, float x, float y,
+                               const Parameters& p) {
+  const auto& xs = pts.getPointsBufferRef_x();
+  const auto& ys = pts.getPointsBufferRef_y();
   std::vector<size_t> idx;
   std::vector<float> d2;
-  ref_.kdTreeNClosestPoint2DIdx(xs[i], ys[i], p_.normal_neighbours, idx, d2);
-  const double r2 = p_.normal_radius * p_.normal_radius;
+  pts.kdTreeNClosestPoint2DIdx(x, y, p.normal_neighbours, idx, d2);
+  const double r2 = p.normal_radius * p.normal_radius;
   double sx = 0, sy = 0;
   size_t n = 0;
   for (size_t k = 0; k < idx.size(); ++k)
     if (d2[k] <= r2) sx += xs[idx[k]], sy += ys[idx[k]], ++n;
-  if (n < 3) return;
+  if (n < 3) return {};
   const double mx = sx / n, my = sy / n;
   double cxx = 0, cxy = 0, cyy = 0;
   for (size_t k = 0; k < idx.size(); ++k) {
@@ -45,14 +70,13 @@ void LineIcp::fitLine(size_t i) {
   // Smaller eigenvalue of the 2x2 scatter and its eigenvector (the normal).
   const double tr = cxx + cyy, det = cxx * cyy - cxy * cxy;
   const double lmin = 0.5 * tr - std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
-  if (lmin > p_.max_line_rms * p_.max_line_rms) return;
+  if (lmin > p.max_line_rms * p.max_line_rms) return {};
   double nx = cxy, ny = lmin - cxx;  // (A - lmin I) v = 0
   if (std::abs(nx) + std::abs(ny) < 1e-12) nx = lmin - cyy, ny = cxy;
   const double norm = std::hypot(nx, ny);
-  if (norm < 1e-12) return;
-  line_[i] = {static_cast<float>(nx / norm), static_cast<float>(ny / norm), static_cast<float>(mx),
-              static_cast<float>(my)};
-  ++lines_;
+  if (norm < 1e-12) return {};
+  return {static_cast<float>(nx / norm), static_cast<float>(ny / norm), static_cast<float>(mx),
+          static_cast<float>(my)};
 }
 
 LineIcp::Result LineIcp::align(const mrpt::maps::CSimplePointsMap& scan, const CPose2D& start,
@@ -81,7 +105,7 @@ LineIcp::Result LineIcp::align(const mrpt::maps::CSimplePointsMap& scan, const C
             ref_.kdTreeClosestPoint2D(static_cast<float>(qx), static_cast<float>(qy), fx, fy, d2);
         if (d2 > pair * pair) continue;
         const Line& l = line_[j];
-        if (l.nx == 0 && l.ny == 0) continue;
+        if (!l.valid()) continue;
         const double r = l.nx * (qx - l.mx) + l.ny * (qy - l.my);
         const double k = p_.huber * p_.sigma;
         const double w = w0 * (std::abs(r) <= k ? 1.0 : k / std::abs(r));

@@ -134,6 +134,7 @@ std::string SlamJobResult::summaryJson(const SlamJobOptions& o) const {
   j.key("loop_closures").value(static_cast<uint64_t>(stats.loop_closures));
   j.key("loop_rejected").value(static_cast<uint64_t>(stats.loop_rejected));
   j.key("graph_optimisations").value(static_cast<uint64_t>(stats.optimisations));
+  j.key("prior_rejected").value(static_cast<uint64_t>(stats.prior_rejected));
   j.key("scans_restamped").value(static_cast<uint64_t>(stats.restamped));
   auto pose = [&](const char* k, const mrpt::poses::CPose2D& p) {
     j.key(k).beginObject();

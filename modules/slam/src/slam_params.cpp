@@ -33,7 +33,12 @@ const ParamTable<SlamParams>& SlamParams::table() {
           .real("keyframe_angle", &SlamParams::keyframe_angle, "deg", 1, 180,
                 "icp-graph: turn between keyframes")
           .real("loop_search_radius", &SlamParams::loop_search_radius, "m", 0.1, 50,
-                "icp-graph: keyframes this close to the current one are loop candidates")
+                "icp-graph: keyframes this close to the current one are loop candidates; "
+                "the radius grows to three standard deviations of the drift accumulated "
+                "since the last loop closure when that is larger")
+          .real("loop_search_max", &SlamParams::loop_search_max, "m", 0.1, 200,
+                "icp-graph: largest loop search radius the drift can ask for (bounds the "
+                "work of a long run without closures)")
           .integer("loop_min_separation", &SlamParams::loop_min_separation, "", 2, 100000,
                    "icp-graph: keyframes between a loop candidate and the current one")
           .real("loop_min_goodness", &SlamParams::loop_min_goodness, "", 0, 1,
@@ -51,7 +56,8 @@ const ParamTable<SlamParams>& SlamParams::table() {
                 "icp-graph: smallest share of that overlap lost when the match is moved "
                 "0.3 m in any direction (a match that can slide along a corridor is no fix)")
           .real("loop_max_correction", &SlamParams::loop_max_correction, "m", 0.01, 100,
-                "icp-graph: largest correction a loop closure may make")
+                "icp-graph: largest correction a loop closure may make (or the search radius "
+                "when that is larger)")
           .flag("loop_consistency", &SlamParams::loop_consistency,
                 "icp-graph: loop closures enter the graph only in groups that agree pair by "
                 "pair with the odometry between them (pairwise consistency, the largest "

@@ -58,13 +58,17 @@ struct MapRun {
 };
 
 MapRun map(const std::string& rawlog, const std::string& method, const fs::path& out,
-           double loop_search_radius = 4.0, bool loop_consistency = false) {
+           double loop_search_radius = 4.0, bool loop_consistency = false,
+           double loop_search_max = -1) {
   slam::SlamJobOptions o;
   o.rawlog = rawlog;
   o.out_dir = out.string();
   o.method = method;
   o.progress = false;
   o.mapper.slam.loop_search_radius = loop_search_radius;
+  // The radius grows with the drift up to loop_search_max (default: no
+  // growth, loop_search_radius is the reach).
+  o.mapper.slam.loop_search_max = loop_search_max >= 0 ? loop_search_max : loop_search_radius;
   o.mapper.slam.loop_consistency = loop_consistency;
   MapRun r;
   r.result = slam::runSlam(o);
@@ -96,6 +100,13 @@ TEST(SlamGraphSimulated, ClosesALoopRevisitedFromAnotherHeading) {
   EXPECT_LT(closed.ate, 0.05);
   // The end of the loop is the start again.
   EXPECT_LT(closed.result.final_pose.norm(), 0.15);
+  // With no reach of its own (0.1 m, as `open`) but allowed to grow with the
+  // drift since the last closure (3 sigma of the chain, up to 15 m), the
+  // search radius finds the loop.
+  const MapRun grown = map(rawlog, "icp-graph", dir / "grown", 0.1, false, 15.0);
+  EXPECT_GE(grown.result.stats.loop_closures, 3u);
+  EXPECT_LT(grown.ate, 0.05);
+  EXPECT_LT(grown.result.final_pose.norm(), 0.15);
   // With the pairwise consistency check (slam.loop_consistency) the
   // closures of the revisit support each other and still enter the graph.
   const MapRun checked = map(rawlog, "icp-graph", dir / "checked", 4.0, true);

@@ -48,9 +48,25 @@ class LineIcp {
     size_t pairs = 0;
   };
 
+  /** The line at a reference point: its unit normal and a point of it (the
+   *  neighbours' mean); a zero normal: no line there (a corner, clutter). */
+  struct Line {
+    float nx = 0, ny = 0;
+    float mx = 0, my = 0;
+    bool valid() const { return nx != 0 || ny != 0; }
+    /** The line in the frame where `frame` is the pose of its own frame. */
+    Line transformed(const mrpt::poses::CPose2D& frame) const;
+  };
+
   explicit LineIcp(const Parameters& p) : p_(p) {}
+  /** The lines of a point set, one per point (e.g. one scan's, fitted once in
+   *  its own frame and moved with it). */
+  static std::vector<Line> fitLines(const mrpt::maps::CSimplePointsMap& pts, const Parameters& p);
+
   /** The reference points (world frame); fits their lines. */
   void setReference(const mrpt::maps::CSimplePointsMap& ref);
+  /** The reference points and their lines, fitted before (same order). */
+  void setReference(const mrpt::maps::CSimplePointsMap& ref, std::vector<Line> lines);
   size_t lines() const { return lines_; }
   /** Aligns the scan (robot frame) from `start`; with `prior` (the pose's
    *  Gaussian prior, world frame) the result is the posterior's mode. */
@@ -58,11 +74,8 @@ class LineIcp {
                const PoseGaussian* prior = nullptr) const;
 
  private:
-  struct Line {
-    float nx = 0, ny = 0;  ///< unit normal; (0, 0): no line here
-    float mx = 0, my = 0;  ///< a point of the line (the neighbours' mean)
-  };
-  void fitLine(size_t i);
+  static Line fitLine(const mrpt::maps::CSimplePointsMap& pts, float x, float y,
+                      const Parameters& p);
 
   Parameters p_;
   mrpt::maps::CSimplePointsMap ref_;

@@ -29,7 +29,8 @@ struct SlamParams {
   // icp-graph only
   double keyframe_distance = 0.5;    ///< m, motion between keyframes (pose-graph nodes)
   double keyframe_angle = 20;        ///< deg
-  double loop_search_radius = 4.0;   ///< m, keyframes this close are loop candidates
+  double loop_search_radius = 4.0;   ///< m, keyframes this close are loop candidates (at least)
+  double loop_search_max = 15.0;     ///< m, largest search radius the drift can ask for
   int loop_min_separation = 20;      ///< keyframes between a candidate and the current one
   double loop_min_goodness = 0.8;    ///< [0,1] ICP quality to accept a loop closure outright
   double loop_min_agreement = 0.9;   ///< [0,1] visibility agreement of a partial-overlap closure
