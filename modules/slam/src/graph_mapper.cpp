@@ -42,8 +42,9 @@ constexpr size_t kLoopTries = 3;         // nearest candidates tried per keyfram
 // front end's right matches agree 0.82 and more, a few right after a failure
 // less, and those are not wide-search matches).
 constexpr double kWideMinAgreement = 0.8;
-// Squared Mahalanobis distance (3 dof) beyond which a scan match and the
-// odometry's prediction disagree: the chi-square 99.9 % quantile.
+// Squared Mahalanobis distance (3 dof) beyond which two pose estimates
+// disagree (a scan match and the odometry's prediction; a loop closure and
+// the current graph): the chi-square 99.9 % quantile.
 constexpr double kPriorGate = 16.27;
 
 struct Keyframe {
@@ -522,12 +523,18 @@ class GraphMapper : public Mapper {
         cov(1, 1) += 0.05 * 0.05;
         cov(2, 2) += (1.0 * kDeg) * (1.0 * kDeg);
       }
-      any = true;
       if (cfg_.slam.loop_consistency) {
+        any = true;
         candidates_.push_back(
             {next_candidate_id_++, {j, k, PoseGaussian(rel, flooredCov(cov))}, false});
         continue;
       }
+      // A closure the current estimate already agrees with (within the
+      // chi-square 99.9 % quantile of its covariance) would move the graph by
+      // less than its own uncertainty: its edge waits for the next
+      // optimisation instead of causing one.
+      const CPose2D now = keyframes_[k].pose - keyframes_[j].pose;
+      any |= mahalanobis2(now, rel, flooredCov(cov)) > kPriorGate;
       graph_.insertEdge(j, k, edgeFromCov(rel, cov));
       loop_edges_.emplace_back(j, k);
       ++stats_.loop_closures;
