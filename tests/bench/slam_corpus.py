@@ -177,7 +177,9 @@ def slam_job(a, log, inp, work):
     if a.mrpt and not a.reuse:
         r.update(mrpt_slam(a, rawlog, ref, os.path.join(work, "mrpt", name), est))
     elif a.reuse:
-        r.update({k: v for k, v in prev[0].items() if k.startswith("mrpt_")})
+        r.update({k: v for k, v in prev[0].items() if k in ("mrpt_exit", "mrpt_cpu_s")})
+        if prev[0].get("mrpt_exit") == 0:
+            r.update(mrpt_eval(a, ref, os.path.join(work, "mrpt", name)))
     return r
 
 
@@ -189,25 +191,31 @@ def mrpt_slam(a, rawlog, ref, out, carenav_tum):
     headless_ini(os.path.join(MRPT_CFG, "icp-slam", "icp-slam_demo_classic.ini"), rawlog, out, ini)
     rc, cpu, _ = run(["icp-slam", ini], os.path.join(out, "run.log"), cwd=out, limit=a.mrpt_limit)
     r = {"mrpt_exit": rc, "mrpt_cpu_s": round(cpu, 2)}
+    if rc == 0:
+        r.update(mrpt_eval(a, ref, out))
+    return r
+
+
+def mrpt_eval(a, ref, out):
+    """ATE and RPE of icp-slam's log_estimated_path.txt ("step x y phi", one
+    step per rawlog entry: with odometry the entries alternate odometry,
+    scan, so the pose after each scan is every second step)."""
     path = os.path.join(out, "log_estimated_path.txt")
-    if rc != 0 or not os.path.exists(path) or not os.path.exists(carenav_tum):
-        return r
-    # MRPT writes "step x y phi" per step; stamp them with the reference's
-    # times by step (one step per scan in both).
+    if not os.path.exists(path):
+        return {}
     refs = tum_rows(ref)
     rows = [l.split() for l in open(path) if l.strip() and not l.startswith("%")]
+    per_scan = len(rows) // len(refs) if refs and len(rows) % len(refs) == 0 else 1
     tum = os.path.join(out, "trajectory.tum")
     with open(tum, "w") as f:
-        for row in rows:
-            k = int(float(row[0]))
-            if k < len(refs):
-                x, y, phi = float(row[1]), float(row[2]), float(row[3])
-                f.write(f"{refs[k][0]:.6f} {x} {y} 0 0 0 {math.sin(phi / 2)} {math.cos(phi / 2)}\n")
+        for i in range(min(len(refs), len(rows) // per_scan)):
+            row = rows[(i + 1) * per_scan - 1]
+            x, y, phi = float(row[1]), float(row[2]), float(row[3])
+            f.write(f"{refs[i][0]:.6f} {x} {y} 0 0 0 {math.sin(phi / 2)} {math.cos(phi / 2)}\n")
     ev = eval_json(a.carenav, tum, ref)
-    if ev:
-        r["mrpt_ate_m"] = metric(ev, "ate", "translation_m", "rmse")
-        r["mrpt_rpe2_m"] = rpe2(ev)
-    return r
+    if not ev:
+        return {}
+    return {"mrpt_ate_m": metric(ev, "ate", "translation_m", "rmse"), "mrpt_rpe2_m": rpe2(ev)}
 
 
 # ------------------------------------------------------------------ localisation
