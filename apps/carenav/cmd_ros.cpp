@@ -104,13 +104,19 @@ void addLocalize(CLI::App& ros, const GlobalOptions& g) {
   auto* cmd = ros.add_subcommand(
       "localize",
       "Monte Carlo localisation on a known map as a ROS node: subscribes scan, odom, "
-      "initialpose; publishes amcl_pose, particlecloud and map -> odom on tf.");
+      "initialpose; publishes amcl_pose, particlecloud and map -> odom on tf. Starts at "
+      "--start, in a room (--in-room) or globally.");
   cmd->add_option("--profile", o->profile, "Robot profile ([localization], its lidar2d)")
       ->required();
   cmd->add_option("--set", o->sets, "Profile override section.key=value (repeatable)");
   cmd->add_option("--map", o->map, "Static map (gridmap, ROS YAML, ...)");
   cmd->add_option("--world", o->world, "Or a simulator world's map");
   cmd->add_option("--start", *start, "Start pose x,y,deg (default: global, over the free cells)");
+  cmd->add_option("--in-room", o->in_room,
+                  "Start over the free cells of this room of the places file only (default: "
+                  "the ~in_room parameter, else global)");
+  cmd->add_option("--places", o->places,
+                  "Places file for --in-room (default: the one beside --map / --world)");
   cmd->add_option("--duration", o->duration, "Seconds; 0: until stopped");
   cmd->allow_extras();
   cmd->callback([o, start, cmd, &g] {
