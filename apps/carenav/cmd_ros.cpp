@@ -45,6 +45,9 @@ void addSim(CLI::App& ros, const GlobalOptions& g) {
   cmd->add_option("--summary", o->summary, "JSON written at the end: truth pose, collisions");
   cmd->add_option("--record", o->record,
                   "Bag of what the node publishes (odom, scans, tf, ground_truth)");
+  cmd->add_flag("--depth", o->depth_images,
+                "Depth cameras publish depth images (depth/image 16UC1 mm + depth/camera_info) "
+                "instead of point clouds");
   cmd->allow_extras();
   cmd->callback([o, start, cmd, &g] {
     if (!o->summary.empty()) prepareOutputFile(o->summary, "--summary");

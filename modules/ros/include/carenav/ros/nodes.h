@@ -33,6 +33,10 @@ struct SimNodeOptions {
   /** A bag of what the node publishes (odom, scans, tf, ground_truth), as
    *  `rosbag record` would write it (rosbag storage); empty: none. */
   std::string record;
+  /** Depth cameras publish depth images (`depth/image`, sensor_msgs/Image
+   *  16UC1 in mm, in the optical frame `LABEL_optical`) and their
+   *  `depth/camera_info` instead of `points` clouds (others: `depth_LABEL/`). */
+  bool depth_images = false;
   std::string odom_frame = "odom", base_frame = "base_link", map_frame = "map";
   std::vector<std::string> ros_args;
   const std::atomic<bool>* stop = nullptr;
