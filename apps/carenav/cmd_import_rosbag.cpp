@@ -1,5 +1,5 @@
 // carenav import rosbag BAG --out X.rawlog [--scan TOPIC[=LABEL]]... [--cloud TOPIC[=LABEL]]...
-//                        [--odom TOPIC|tf|none]
+//                        [--depth TOPIC[=LABEL]]... [--camera-info TOPIC]... [--odom TOPIC|tf|none]
 // (built with the ROS part only). Also registers `.bag` with the rawlog
 // reader, so every command that reads a rawlog reads a bag.
 #include "commands.h"
@@ -31,7 +31,8 @@ void addImportRosbag(CLI::App& import_cmd, const GlobalOptions& g) {
   auto* cmd = import_cmd.add_subcommand(
       "rosbag",
       "Convert a ROS 1 bag to an MRPT rawlog (observation-only form, gzip): its "
-      "sensor_msgs/LaserScan as 2D scans and PointCloud2 as 3D points (sensor pose from "
+      "sensor_msgs/LaserScan as 2D scans, PointCloud2 as 3D points and depth Images (with "
+      "their CameraInfo) as range images (sensor pose from "
       "/tf_static or /tf up to the base frame, else the profile's [sensor.LABEL]) and its odometry "
       "(nav_msgs/Odometry, or the "
       "odom -> base_link transform of /tf) with the messages' own time stamps. The bag is read "
@@ -47,6 +48,15 @@ void addImportRosbag(CLI::App& import_cmd, const GlobalOptions& g) {
                   "PointCloud2 topic to read, TOPIC or TOPIC=LABEL (as --scan), as "
                   "CObservation3DRangeScan points for carenav perceive; repeatable, or 'none'. "
                   "Default: every PointCloud2 topic");
+  cmd->add_option("--depth", a->opt.read.depths,
+                  "Depth image topic (sensor_msgs/Image, 16UC1 mm or 32FC1 m) to read, TOPIC or "
+                  "TOPIC=LABEL (default label: the image's frame without _optical_frame), as "
+                  "CObservation3DRangeScan range images with the intrinsics of its "
+                  "camera_info; repeatable, or 'none'. Default: every 16UC1 / 32FC1 Image topic "
+                  "with a CameraInfo on its sibling camera_info topic");
+  cmd->add_option("--camera-info", a->opt.read.camera_infos,
+                  "CameraInfo topic of each --depth, in order (default: the depth topic's "
+                  "sibling, /cam/depth/image_raw -> /cam/depth/camera_info)");
   cmd->add_option("--odom", a->opt.read.odom,
                   "Odometry: a nav_msgs/Odometry topic, 'tf' (odom -> base frame on /tf) or "
                   "'none'. Default: the bag's first Odometry topic, else tf");

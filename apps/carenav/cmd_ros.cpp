@@ -45,6 +45,9 @@ void addSim(CLI::App& ros, const GlobalOptions& g) {
   cmd->add_option("--summary", o->summary, "JSON written at the end: truth pose, collisions");
   cmd->add_option("--record", o->record,
                   "Bag of what the node publishes (odom, scans, tf, ground_truth)");
+  cmd->add_flag("--depth", o->depth_images,
+                "Depth cameras publish depth images (depth/image 16UC1 mm + depth/camera_info) "
+                "instead of point clouds");
   cmd->allow_extras();
   cmd->callback([o, start, cmd, &g] {
     if (!o->summary.empty()) prepareOutputFile(o->summary, "--summary");
@@ -104,13 +107,19 @@ void addLocalize(CLI::App& ros, const GlobalOptions& g) {
   auto* cmd = ros.add_subcommand(
       "localize",
       "Monte Carlo localisation on a known map as a ROS node: subscribes scan, odom, "
-      "initialpose; publishes amcl_pose, particlecloud and map -> odom on tf.");
+      "initialpose; publishes amcl_pose, particlecloud and map -> odom on tf. Starts at "
+      "--start, in a room (--in-room) or globally.");
   cmd->add_option("--profile", o->profile, "Robot profile ([localization], its lidar2d)")
       ->required();
   cmd->add_option("--set", o->sets, "Profile override section.key=value (repeatable)");
   cmd->add_option("--map", o->map, "Static map (gridmap, ROS YAML, ...)");
   cmd->add_option("--world", o->world, "Or a simulator world's map");
   cmd->add_option("--start", *start, "Start pose x,y,deg (default: global, over the free cells)");
+  cmd->add_option("--in-room", o->in_room,
+                  "Start over the free cells of this room of the places file only (default: "
+                  "the ~in_room parameter, else global)");
+  cmd->add_option("--places", o->places,
+                  "Places file for --in-room (default: the one beside --map / --world)");
   cmd->add_option("--duration", o->duration, "Seconds; 0: until stopped");
   cmd->allow_extras();
   cmd->callback([o, start, cmd, &g] {

@@ -243,31 +243,40 @@ TEST(CliRosNodes, WalkerFollowsTheIntentTopic) {
 #endif
 }
 
-TEST(CliRosNodes, WalkerRefusesTheStairs) {
-  SKIP_WITHOUT_ROS();
 #ifdef CARENAV_TEST_WITH_ROS
-  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
-  const fs::path dir = testDir();
+/** What pushing the ISR-AIWALKER at the stairs gave: the farthest east its
+ *  true centre got, the sim's summary and navigate's summary.json. */
+struct StairsPush {
+  double max_x = -1e9;
+  std::string truth, summary;
+};
+
+/** ISR-AIWALKER (Kinect as `points`, or with `sim_extra` {"--depth"} as
+ *  `depth/image` + `depth/camera_info`; Leddar as `scan_leddar`) pushed at
+ *  0.3 m/s for 20 s at a staircase going down that starts at x = 6 m
+ *  (walker-stairs-down.yaml), with `ros navigate` between the user and the
+ *  base. */
+StairsPush pushWalkerAtStairs(const fs::path& dir, std::vector<std::string> sim_extra = {}) {
   initTestNode();
   ::ros::NodeHandle nh;
   auto intent = nh.advertise<geometry_msgs::Twist>("intent", 5);
   // The farthest east the true walker got (the sim's ground_truth topic).
   std::mutex mu;
-  double max_x = -1e9;
+  StairsPush r;
   auto truth_sub = nh.subscribe<nav_msgs::Odometry>(
       "ground_truth", 100, [&](const nav_msgs::Odometry::ConstPtr& m) {
         std::lock_guard<std::mutex> l(mu);
-        max_x = std::max(max_x, m->pose.pose.position.x);
+        r.max_x = std::max(r.max_x, m->pose.pose.position.x);
       });
   ::ros::AsyncSpinner spinner(1);
   spinner.start();
-  // ISR-AIWALKER (Kinect as `points`, Leddar as `scan_leddar`) pushed at a
-  // staircase going down that starts at x = 6 m (walker-stairs-down.yaml).
   const std::string walker = kSrc + "/ini/isr-aiwalker.ini";
-  const pid_t sim = spawn({kBin, "-q", "ros", "sim", "--profile", walker, "--scenario",
-                           kSrc + "/maps/scenarios/walker-stairs-down.yaml", "--duration", "150",
-                           "--summary", (dir / "sim.json").string()},
-                          dir / "sim.log");
+  std::vector<std::string> sim_args{
+      kBin,         "-q",   "ros",        "sim",
+      "--profile",  walker, "--scenario", kSrc + "/maps/scenarios/walker-stairs-down.yaml",
+      "--duration", "150",  "--summary",  (dir / "sim.json").string()};
+  sim_args.insert(sim_args.end(), sim_extra.begin(), sim_extra.end());
+  const pid_t sim = spawn(sim_args, dir / "sim.log");
   const auto out = dir / "nav";
   const pid_t nav = spawn({kBin, "-q", "ros", "navigate", nodeName("navigate"), "--profile", walker,
                            "--duration", "120", "--out", out.string()},
@@ -285,15 +294,43 @@ TEST(CliRosNodes, WalkerRefusesTheStairs) {
   ::kill(nav, SIGINT);
   waitExit(nav);
   spinner.stop();
-  truth_sub.shutdown();  // (the callback uses this test's locals)
-  const std::string truth = slurp(dir / "sim.json");
-  EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
+  truth_sub.shutdown();  // (the callback uses this function's locals)
   std::lock_guard<std::mutex> l(mu);
+  r.truth = slurp(dir / "sim.json");
+  r.summary = slurp(out / "summary.json");
+  return r;
+}
+#endif
+
+TEST(CliRosNodes, WalkerRefusesTheStairs) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  const auto [max_x, truth, summary] = pushWalkerAtStairs(dir);
+  EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
   EXPECT_GT(max_x, 4.0) << "the walker walked towards the stairs: " << truth;
   EXPECT_LT(max_x, 6.0) << "its centre never reached the stairs (x >= 6 m): " << truth;
   std::cout << "farthest east: x = " << max_x << " m (the stairs begin at 6 m)\n";
-  const std::string summary = slurp(out / "summary.json");
   EXPECT_GT(jsonNumber(summary, "depth_frames"), 10u) << summary;
+#endif
+}
+
+// The same walker with its Kinect as depth images and their CameraInfo
+// (`ros sim --depth`) instead of clouds: it refuses the stairs as well.
+TEST(CliRosNodes, WalkerOnDepthImagesRefusesTheStairs) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  const auto [max_x, truth, summary] = pushWalkerAtStairs(dir, {"--depth"});
+  EXPECT_NE(truth.find("\"collisions\": 0"), std::string::npos) << truth;
+  EXPECT_GT(max_x, 4.0) << "the walker walked towards the stairs: " << truth;
+  EXPECT_LT(max_x, 6.0) << "its centre never reached the stairs (x >= 6 m): " << truth;
+  std::cout << "farthest east on depth images: x = " << max_x << " m (the stairs begin at 6 m), "
+            << jsonNumber(summary, "depth_frames") << " depth frames\n";
+  EXPECT_GT(jsonNumber(summary, "depth_frames"), 10u)
+      << "the images reached perception: " << summary;
 #endif
 }
 

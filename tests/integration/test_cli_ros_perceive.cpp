@@ -3,12 +3,16 @@
 // staircase going down publishes a virtual scan whose ranges ahead end at
 // the stair edge; facing open floor they are long or empty. Skipped
 // without the ROS part. A bag the sim records with its clouds perceives as
-// the rawlog `import rosbag --cloud` makes of it. A depth image with its
+// the rawlog `import rosbag --cloud` makes of it; a bag of `ros sim --depth`
+// (depth images + CameraInfo) imports with `--depth` and perceives with the
+// obstacles of the cloud bag of the same scene. A depth image with its
 // CameraInfo (the test's own: floor up to a wall 2 m ahead) gives a scan
 // ending at the wall.
 #include "cli_helpers.h"
 
 #ifdef CARENAV_TEST_WITH_ROS
+#include <carenav/io/map_io.h>
+
 #include <nav_msgs/OccupancyGrid.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
@@ -16,8 +20,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <regex>
+#include <set>
 
 #include "ros_nodes_helpers.h"
 #endif
@@ -25,6 +31,7 @@
 namespace {
 
 using namespace carenav_test;
+using carenav_test::carenav;  // not the namespace carenav (carenav/io/map_io.h)
 
 #ifdef CARENAV_TEST_WITH_ROS
 using namespace carenav_ros_test;
@@ -172,6 +179,93 @@ TEST(CliRosPerceive, SimBagCloudsPerceiveAsTheirRawlog) {
   ASSERT_TRUE(std::regex_search(a.back(), occ, std::regex("\"occupied\": ([0-9]+)")));
   std::cout << clouds << " clouds; the last frame: " << a.back() << "\n";
   EXPECT_GT(std::stoi(occ[1]), 100) << "the stair edge and the walls are obstacles";
+#endif
+}
+
+/** `ros sim` (the walker facing the stairs) for 3 s of simulated time,
+ *  recording DIR/NAME.bag; `extra`: more sim options. */
+fs::path recordStairs(const fs::path& dir, const std::string& name,
+                      std::vector<std::string> extra = {}) {
+  const auto bag = dir / (name + ".bag");
+  std::vector<std::string> args{"--profile", kWalker,      "--world", kStairs,    "--start",
+                                "4.5,2.0,0", "--duration", "3",       "--record", bag.string()};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const pid_t sim = startRosNode(dir, "sim", args, "sim_" + name);
+  EXPECT_EQ(waitExit(sim), 0) << slurp(dir / ("sim_" + name + ".log"));
+  return bag;
+}
+
+/** The cells (i, j) of a perceive frame grid with p(occupied) above 0.55. */
+std::set<std::pair<int, int>> obstacleCells(const fs::path& gridmap) {
+  const auto g = carenav::io::loadGridMap(gridmap.string());
+  std::set<std::pair<int, int>> out;
+  for (unsigned j = 0; j < g.getSizeY(); ++j)
+    for (unsigned i = 0; i < g.getSizeX(); ++i)
+      if (1.0 - g.getCell(i, j) > 0.55) out.insert({static_cast<int>(i), static_cast<int>(j)});
+  return out;
+}
+
+/** `carenav perceive` (the walker) on INPUT into DIR/OUT: the frames' cells. */
+std::vector<std::string> perceiveCells(const fs::path& input, const fs::path& out) {
+  const auto r = carenav(
+      {"-q", "perceive", "--profile", kWalker, "--rawlog", input.string(), "--out", out.string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  return frameCells(slurp(out / "summary.json"));
+}
+
+// `ros sim --depth` publishes the Kinect as depth images with their
+// CameraInfo; a bag of them imports with `--depth` as range images, and
+// `carenav perceive` reads it (directly and as the imported rawlog) as it
+// reads the bag of clouds of the same scene: the same local grids.
+TEST(CliRosPerceive, SimDepthBagPerceivesAsItsCloudBag) {
+  SKIP_WITHOUT_ROS();
+#ifdef CARENAV_TEST_WITH_ROS
+  ASSERT_TRUE(sharedMaster().up()) << slurp(sharedMaster().dir() / "master.log");
+  const fs::path dir = testDir();
+  const auto depth_bag = recordStairs(dir, "depth", {"--depth"});
+  const auto cloud_bag = recordStairs(dir, "cloud");
+  const auto rawlog = dir / "depth.rawlog";
+  const auto imp = carenav({"-q", "import", "rosbag", depth_bag.string(), "--depth",
+                            "/depth/image=kinect", "--out", rawlog.string(), "--json"});
+  ASSERT_EQ(imp.code, 0) << imp.err;
+  const uint64_t images = jsonNumber(imp.out, "depth_images");
+  EXPECT_GE(images, 20u) << imp.out;  // the Kinect at 10 Hz for 3 s
+  EXPECT_EQ(jsonNumber(imp.out, "clouds"), 0u) << imp.out;
+  EXPECT_EQ(jsonNumber(imp.out, "depth_images_without_tf"), 0u) << imp.out;
+  // A camera_info topic with no message: every image left out.
+  const auto none = carenav({"-q", "import", "rosbag", depth_bag.string(), "--depth",
+                             "/depth/image", "--camera-info", "/no/camera_info", "--out",
+                             (dir / "none.rawlog").string(), "--json"});
+  EXPECT_EQ(none.code, 0) << none.err;  // the odometry is still there
+  EXPECT_EQ(jsonNumber(none.out, "depth_images_left_out"), images) << none.out;
+  const auto mismatch =
+      carenav({"-q", "import", "rosbag", depth_bag.string(), "--depth", "/a", "--depth", "/b",
+               "--camera-info", "/c", "--out", (dir / "bad.rawlog").string()});
+  EXPECT_EQ(mismatch.code, 2);
+  EXPECT_NE(mismatch.err.find("one camera_info topic per depth topic"), std::string::npos)
+      << mismatch.err;
+  const auto from_bag = perceiveCells(depth_bag, dir / "depth_bag");
+  const auto from_rawlog = perceiveCells(rawlog, dir / "depth_rawlog");
+  const auto from_clouds = perceiveCells(cloud_bag, dir / "cloud_bag");
+  EXPECT_EQ(from_bag.size(), images) << "every depth image read by default";
+  EXPECT_EQ(from_bag, from_rawlog) << "the bag and its rawlog give the same local grids";
+  EXPECT_EQ(from_clouds.size(), images) << "as many clouds as images";
+  ASSERT_FALSE(from_bag.empty());
+  // The obstacles of the clouds' last local grid are obstacles of the depth
+  // images' too; the images find more (drop edges from the image columns:
+  // a bag's cloud reaches perception without its organisation).
+  char last[32];
+  std::snprintf(last, sizeof(last), "frame_%04u.gridmap.gz", static_cast<unsigned>(images - 1));
+  const auto from_depth = obstacleCells(dir / "depth_bag" / last);
+  const auto from_cloud = obstacleCells(dir / "cloud_bag" / last);
+  size_t shared = 0;
+  for (const auto& c : from_cloud) shared += from_depth.count(c);
+  std::cout << images << " depth images; the last frame's obstacle cells: " << from_depth.size()
+            << " from depth images, " << from_cloud.size() << " from clouds, " << shared
+            << " of these in both\n";
+  EXPECT_GT(from_cloud.size(), 100u) << "the stair edge and the walls are obstacles";
+  EXPECT_GE(from_depth.size(), from_cloud.size());
+  EXPECT_GE(shared, 0.95 * from_cloud.size()) << "the clouds' obstacles are found in the images";
 #endif
 }
 

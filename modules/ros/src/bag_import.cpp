@@ -1,4 +1,4 @@
-// carenav import rosbag: a bag's scans, clouds and odometry to an observation-only
+// carenav import rosbag: a bag's scans, clouds, depth images and odometry to an observation-only
 // rawlog (gzip), written to a temporary name and renamed.
 #include <carenav/common/errors.h>
 #include <carenav/common/json.h>
@@ -27,6 +27,14 @@ std::string BagImportStats::toText() const {
     if (notes.clouds_no_tf)
       o << " (" << notes.clouds_no_tf << " placed by the profile or at the origin: no tf)";
   }
+  if (notes.depth_images || notes.depth_dropped) {
+    o << "\ndepth images: " << notes.depth_images;
+    if (notes.depth_no_tf)
+      o << " (" << notes.depth_no_tf << " placed by the profile or at the origin: no tf)";
+    if (notes.depth_dropped)
+      o << " (" << notes.depth_dropped
+        << " left out: no camera_info before them, or an encoding not read)";
+  }
   o << "\nodometry:     " << notes.odometry << "\n";
   o << "written:      " << written << " observations\n";
   o << "topics:\n";
@@ -43,6 +51,9 @@ std::string BagImportStats::toJson() const {
   j.key("scans_without_tf").value(static_cast<uint64_t>(notes.scans_no_tf));
   j.key("clouds").value(static_cast<uint64_t>(notes.clouds));
   j.key("clouds_without_tf").value(static_cast<uint64_t>(notes.clouds_no_tf));
+  j.key("depth_images").value(static_cast<uint64_t>(notes.depth_images));
+  j.key("depth_images_without_tf").value(static_cast<uint64_t>(notes.depth_no_tf));
+  j.key("depth_images_left_out").value(static_cast<uint64_t>(notes.depth_dropped));
   j.key("odometry").value(static_cast<uint64_t>(notes.odometry));
   j.key("written").value(static_cast<uint64_t>(written));
   j.key("topics").beginObject();

@@ -10,6 +10,8 @@
 #include <mrpt/obs/CObservationOdometry.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/serialization.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/LaserScan.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
@@ -72,6 +74,7 @@ class BagSource : public io::ObservationSource {
     for (const auto& s : o_.clouds)
       if (s != "none") cloud_labels_.insert(topicLabel(s));
     no_clouds_ = o_.clouds.size() == 1 && o_.clouds[0] == "none";
+    chooseDepthTopics();
     o_.odom_frame = bareFrame(o_.odom_frame);
     o_.base_frame = bareFrame(o_.base_frame);
   }
@@ -86,6 +89,11 @@ class BagSource : public io::ObservationSource {
       throw InputError(path + ": " + b.what);
     }
   }
+  /** A depth image topic: its label ("" default) and CameraInfo topic. */
+  struct DepthTopic {
+    std::string label, info;
+  };
+  void chooseDepthTopics();
   CObservation::Ptr take(const BagMessage& m);
   static std::pair<std::string, std::string> topicLabel(const std::string& s) {
     const size_t eq = s.find('=');
@@ -93,15 +101,20 @@ class BagSource : public io::ObservationSource {
   }
   CObservation::Ptr scan(const BagMessage& m, const std::string& label);
   CObservation::Ptr cloud(const BagMessage& m, const std::string& label);
+  CObservation::Ptr depth(const BagMessage& m, const DepthTopic& d);
   /** The label (given, else the frame, else the topic) and the pose on the
-   *  robot (tf, else the profile's by label, else the origin: `no_tf` counts). */
+   *  robot (tf, else the profile's by label, else the origin: `no_tf` counts).
+   *  `optical`: the frame is a camera's optical frame (an image's), its
+   *  default label the camera's and the pose the camera's body frame. */
   std::pair<std::string, CPose3D> placed(const std::string& frame_id, const std::string& given,
-                                         const std::string& topic, size_t& no_tf) const;
+                                         const std::string& topic, size_t& no_tf,
+                                         bool optical = false) const;
   CObservation::Ptr odometry(const BagMessage& m);
   CObservation::Ptr transforms(const BagMessage& m);
   bool odomTopic(const BagConnection& c);
   bool scanTopic(const BagConnection& c, std::string& label) const;
   bool cloudTopic(const BagConnection& c, std::string& label) const;
+  bool depthTopic(const BagConnection& c, DepthTopic& d) const;
 
   std::string path_;
   BagReadOptions o_;
@@ -110,9 +123,32 @@ class BagSource : public io::ObservationSource {
   std::map<std::string, std::string> scan_labels_;  // topic -> label ("" default)
   std::map<std::string, std::string> cloud_labels_;
   bool no_clouds_ = false;
+  std::map<std::string, DepthTopic> depth_topics_;  // image topic -> label, CameraInfo topic
+  bool no_depth_ = false;
+  std::map<std::string, sensor_msgs::CameraInfo> infos_;  // CameraInfo topic -> the last
   FrameTree frames_;
   std::optional<std::string> odom_topic_;  // the Odometry topic read, once chosen
 };
+
+/** `/cam/depth/image_raw` -> `/cam/depth/camera_info`. */
+std::string siblingCameraInfo(const std::string& topic) {
+  const size_t slash = topic.rfind('/');
+  return (slash == std::string::npos ? std::string() : topic.substr(0, slash + 1)) + "camera_info";
+}
+
+void BagSource::chooseDepthTopics() {
+  no_depth_ = o_.depths.size() == 1 && o_.depths[0] == "none";
+  if (no_depth_) return;
+  if (!o_.camera_infos.empty() && o_.camera_infos.size() != o_.depths.size())
+    throw InputError("give one camera_info topic per depth topic (" +
+                     std::to_string(o_.depths.size()) + " depth, " +
+                     std::to_string(o_.camera_infos.size()) + " camera_info)");
+  for (size_t i = 0; i < o_.depths.size(); ++i) {
+    const auto [topic, label] = topicLabel(o_.depths[i]);
+    depth_topics_[topic] = {
+        label, o_.camera_infos.empty() ? siblingCameraInfo(topic) : o_.camera_infos[i]};
+  }
+}
 
 bool BagSource::next(CObservation::Ptr& out) {
   BagMessage m;
@@ -146,6 +182,11 @@ CObservation::Ptr BagSource::take(const BagMessage& m) {
   std::string label;
   if (scanTopic(c, label)) return scan(m, label);
   if (cloudTopic(c, label)) return cloud(m, label);
+  if (DepthTopic d; depthTopic(c, d)) return depth(m, d);
+  if (!no_depth_ && isType<sensor_msgs::CameraInfo>(c)) {
+    infos_[c.topic] = decode<sensor_msgs::CameraInfo>(m);
+    return nullptr;
+  }
   if (odomTopic(c)) return odometry(m);
   if (isType<tf2_msgs::TFMessage>(c) && (c.topic == "/tf" || c.topic == "/tf_static"))
     return transforms(m);
@@ -171,6 +212,18 @@ bool BagSource::cloudTopic(const BagConnection& c, std::string& label) const {
   return true;
 }
 
+bool BagSource::depthTopic(const BagConnection& c, DepthTopic& d) const {
+  if (no_depth_ || !isType<sensor_msgs::Image>(c)) return false;
+  if (depth_topics_.empty()) {  // every depth image with a CameraInfo (depth() checks)
+    d = {"", siblingCameraInfo(c.topic)};
+    return true;
+  }
+  const auto it = depth_topics_.find(c.topic);
+  if (it == depth_topics_.end()) return false;
+  d = it->second;
+  return true;
+}
+
 bool BagSource::odomTopic(const BagConnection& c) {
   if (!isType<nav_msgs::Odometry>(c) || o_.odom == "tf" || o_.odom == "none") return false;
   if (!odom_topic_) {
@@ -182,10 +235,14 @@ bool BagSource::odomTopic(const BagConnection& c) {
 
 std::pair<std::string, CPose3D> BagSource::placed(const std::string& frame_id,
                                                   const std::string& given,
-                                                  const std::string& topic, size_t& no_tf) const {
+                                                  const std::string& topic, size_t& no_tf,
+                                                  bool optical) const {
   const std::string frame = bareFrame(frame_id);
-  const std::string label = !given.empty() ? given : !frame.empty() ? frame : bareFrame(topic);
-  if (const auto pose = frames_.in(frame, o_.base_frame)) return {label, *pose};
+  const std::string label = !given.empty()   ? given
+                            : !frame.empty() ? (optical ? cameraOfOpticalFrame(frame) : frame)
+                                             : bareFrame(topic);
+  if (const auto pose = frames_.in(frame, o_.base_frame))
+    return {label, optical ? *pose + (-opticalInBody()) : *pose};
   ++no_tf;
   const auto it = o_.sensor_poses.find(label);
   return {label, it != o_.sensor_poses.end() ? it->second : CPose3D()};
@@ -211,6 +268,26 @@ CObservation::Ptr BagSource::cloud(const BagMessage& m, const std::string& given
   if (msg.header.stamp.isZero()) o->timestamp = fromRosTime(::ros::Time(m.sec, m.nsec));
   notes_->clouds_no_tf += no_tf;
   ++notes_->clouds;
+  return o;
+}
+
+// A depth image is read with the last CameraInfo of its camera; unchosen
+// (every Image topic read) only in 16UC1 or 32FC1 and with one, else it is
+// a topic not read.
+CObservation::Ptr BagSource::depth(const BagMessage& m, const DepthTopic& d) {
+  const auto msg = decode<sensor_msgs::Image>(m);
+  const auto info = infos_.find(d.info);
+  if (depth_topics_.empty() &&
+      ((msg.encoding != "16UC1" && msg.encoding != "32FC1") || info == infos_.end()))
+    return ++notes_->skipped, nullptr;
+  if (info == infos_.end()) return ++notes_->depth_dropped, nullptr;
+  size_t no_tf = 0;
+  const auto [label, pose] = placed(msg.header.frame_id, d.label, m.connection->topic, no_tf, true);
+  auto o = depthFromRos(msg, info->second, label, pose);
+  if (!o) return ++notes_->depth_dropped, nullptr;
+  if (msg.header.stamp.isZero()) o->timestamp = fromRosTime(::ros::Time(m.sec, m.nsec));
+  notes_->depth_no_tf += no_tf;
+  ++notes_->depth_images;
   return o;
 }
 

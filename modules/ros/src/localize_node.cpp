@@ -4,6 +4,8 @@
 #include <carenav/io/map_io.h>
 #include <carenav/localization/localization_params.h>
 #include <carenav/localization/localizer.h>
+#include <carenav/places/places.h>
+#include <carenav/places/places_report.h>
 #include <carenav/ros/nodes.h>
 #include <carenav/runtime/session.h>
 #include <carenav/sim/world.h>
@@ -20,12 +22,15 @@
 #include <tf2_msgs/TFMessage.h>
 
 #include <iostream>
+#include <optional>
 
 namespace carenav::ros {
 
 namespace {
 
 using mrpt::poses::CPose2D;
+
+const char* const kInRoomParam = "in_room";  // ~in_room: the node's own, not a profile key
 
 class LocalizeNode {
  public:
@@ -116,28 +121,55 @@ void LocalizeNode::publish(const ::ros::Time& stamp) {
 
 }  // namespace
 
+namespace {
+
+/** The room the filter starts in (`--in-room`, else `~in_room`), read from
+ *  the places file; none when no room is named. Throws InputError for an
+ *  unknown room ("FILE: no room named 'NAME' (rooms: ...)"), a bad places
+ *  file, or a room together with --start. */
+std::optional<places::RoomArea> startRoom(const LocalizeNodeOptions& o, const std::string& name) {
+  if (name.empty()) return std::nullopt;
+  if (o.start) throw InputError("give --start or --in-room (~in_room), not both");
+  const std::string file =
+      !o.places.empty() ? o.places : places::placesPathForMap(!o.world.empty() ? o.world : o.map);
+  return places::readRoomArea(file, name);
+}
+
+void initFilter(localization::Localizer& loc, const LocalizeNodeOptions& o,
+                const std::optional<places::RoomArea>& room) {
+  if (o.start)
+    loc.initPose(CPose2D(o.start->x, o.start->y, o.start->phi), 0.2, 0.2, mrpt::DEG2RAD(5.0));
+  else if (room)
+    loc.initInRegion(room->inside, "room '" + room->name + "'");
+  else
+    loc.initGlobal();
+}
+
+}  // namespace
+
 void runLocalizeNode(const LocalizeNodeOptions& o) {
   auto setup = navigation::sessionSetup(o.profile, o.sets, "");  // bad input: before ROS
   if (o.map.empty() == o.world.empty()) throw InputError("give --map M or --world W.yaml");
   const auto grid = !o.world.empty() ? sim::loadWorld(o.world).grid() : io::loadGridMap(o.map);
+  auto room = startRoom(o, o.in_room);
   initRosNode("carenav_localize", o.ros_args);
-  if (auto sets = privateParamOverrides(); !sets.empty()) {
+  if (auto sets = privateParamOverrides({kInRoomParam}); !sets.empty()) {
     sets.insert(sets.end(), o.sets.begin(), o.sets.end());
     setup = navigation::sessionSetup(o.profile, sets, "");
   }
+  if (o.in_room.empty()) room = startRoom(o, ::ros::param::param<std::string>("~in_room", ""));
   const SensorParams* lidar = nullptr;
   for (const auto& s : setup.sensors)
     if (s.type == "lidar2d" && !lidar) lidar = &s;
   if (!lidar) throw InputError(o.profile + ": no lidar2d sensor to localise with");
   localization::Localizer loc(
       grid, setup.profile.section<localization::LocalizationParams>("localization"));
-  if (o.start)
-    loc.initPose(CPose2D(o.start->x, o.start->y, o.start->phi), 0.2, 0.2, mrpt::DEG2RAD(5.0));
-  else
-    loc.initGlobal();
+  initFilter(loc, o, room);
   {
     LocalizeNode node(o, loc, *lidar);
-    if (!o.quiet) std::cerr << "carenav ros localize: " << loc.particleCount() << " particles\n";
+    if (!o.quiet)
+      std::cerr << "carenav ros localize: " << loc.particleCount() << " particles"
+                << (room ? " in room '" + room->name + "'" : std::string()) << "\n";
     spinNode(o.duration, o.stop);
   }
   ::ros::shutdown();

@@ -170,6 +170,47 @@ mrpt::obs::CObservation3DRangeScan::Ptr depthFromRos(const sensor_msgs::Image& i
   return o;
 }
 
+bool depthToRos(const mrpt::obs::CObservation3DRangeScan& o, const std::string& frame,
+                const ::ros::Time& stamp, sensor_msgs::Image& img, sensor_msgs::CameraInfo& info) {
+  if (!o.hasRangeImage) return false;
+  const size_t H = static_cast<size_t>(o.rangeImage.rows());
+  const size_t W = static_cast<size_t>(o.rangeImage.cols());
+  img.header.stamp = info.header.stamp = stamp;
+  img.header.frame_id = info.header.frame_id = frame;
+  img.height = info.height = static_cast<uint32_t>(H);
+  img.width = info.width = static_cast<uint32_t>(W);
+  img.encoding = "16UC1";
+  img.is_bigendian = 0;
+  img.step = static_cast<uint32_t>(2 * W);
+  img.data.resize(2 * W * H);
+  const double to_mm = o.rangeUnits / 0.001;
+  for (size_t r = 0; r < H; ++r)
+    for (size_t c = 0; c < W; ++c) {
+      const double mm = std::round(o.rangeImage(r, c) * to_mm);
+      const uint16_t v = mm < 65535 ? static_cast<uint16_t>(mm) : 0;
+      std::memcpy(&img.data[2 * (r * W + c)], &v, 2);
+    }
+  const auto& cp = o.cameraParams;
+  info.distortion_model = "plumb_bob";
+  info.D.assign(5, 0.0);
+  info.K = {cp.fx(), 0, cp.cx(), 0, cp.fy(), cp.cy(), 0, 0, 1};
+  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  info.P = {cp.fx(), 0, cp.cx(), 0, 0, cp.fy(), cp.cy(), 0, 0, 0, 1, 0};
+  return true;
+}
+
+mrpt::poses::CPose3D opticalInBody() {
+  return mrpt::poses::CPose3D(0, 0, 0, -M_PI / 2, 0, -M_PI / 2);
+}
+
+std::string cameraOfOpticalFrame(const std::string& frame) {
+  for (const std::string suffix : {"_optical_frame", "_optical"})
+    if (frame.size() > suffix.size() &&
+        frame.compare(frame.size() - suffix.size(), suffix.size(), suffix) == 0)
+      return frame.substr(0, frame.size() - suffix.size());
+  return frame;
+}
+
 nav_msgs::OccupancyGrid gridToRos(const mrpt::maps::COccupancyGridMap2D& g,
                                   const std::string& frame, const ::ros::Time& stamp) {
   nav_msgs::OccupancyGrid m;

@@ -57,6 +57,22 @@ mrpt::obs::CObservation3DRangeScan::Ptr depthFromRos(const sensor_msgs::Image& i
                                                      const std::string& label,
                                                      const mrpt::poses::CPose3D& sensor_pose);
 
+/** A depth observation's range image as a 16UC1 Image (mm; 0: no return)
+ *  and its intrinsics as the CameraInfo (K, P, no distortion), both in
+ *  `frame` (the camera's optical frame) and stamped `stamp`; false when the
+ *  observation has no range image. The inverse of depthFromRos. */
+bool depthToRos(const mrpt::obs::CObservation3DRangeScan& o, const std::string& frame,
+                const ::ros::Time& stamp, sensor_msgs::Image& img, sensor_msgs::CameraInfo& info);
+
+/** The pose of a camera's optical frame (z along the optical axis, x right,
+ *  y down: the frame of sensor_msgs/Image) in its body frame (x forward, y
+ *  left, z up; REP 103): yaw -90 deg, roll -90 deg. */
+mrpt::poses::CPose3D opticalInBody();
+
+/** A camera's label from its optical frame's name: without a trailing
+ *  `_optical_frame` or `_optical` ("kinect_optical" -> "kinect"). */
+std::string cameraOfOpticalFrame(const std::string& frame);
+
 /** An MRPT grid as a ROS map in `frame`: -1 unknown (p = 0.5), else
  *  100 x p(occupied), rows along y from the grid's lower corner. */
 nav_msgs::OccupancyGrid gridToRos(const mrpt::maps::COccupancyGridMap2D& g,

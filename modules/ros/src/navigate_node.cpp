@@ -10,6 +10,7 @@
 #include <carenav/runtime/session.h>
 #include <carenav/sim/world.h>
 
+#include "depth_topics.h"
 #include "msg_convert.h"
 #include "node_common.h"
 
@@ -22,12 +23,12 @@
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
-#include <sensor_msgs/PointCloud2.h>
 #include <std_msgs/String.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 namespace carenav::ros {
 
@@ -93,7 +94,7 @@ class NavigateNode {
   void onScan(const sensor_msgs::LaserScan& m);
   void subscribeOthers();
   void onOtherScan(const SensorParams& sp, const sensor_msgs::LaserScan& m);
-  void onPoints(const SensorParams& sp, const sensor_msgs::PointCloud2& m);
+  void onDepth(const mrpt::obs::CObservation3DRangeScan::Ptr& o, const ::ros::Time& stamp);
   void onOdom(const nav_msgs::Odometry& m);
   void onGoal(const geometry_msgs::PoseStamped& m);
   void onGoalPlace(const std_msgs::String& m);
@@ -117,7 +118,8 @@ class NavigateNode {
   NavigationSession& s_;
   ::ros::NodeHandle nh_, pnh_;
   ::ros::Subscriber scan_, odom_, goal_, place_, intent_, amcl_;
-  std::vector<::ros::Subscriber> others_;  // scan_LABEL, points[_LABEL]
+  std::vector<::ros::Subscriber> others_;             // scan_LABEL
+  std::vector<std::unique_ptr<DepthTopics>> depths_;  // points[_LABEL], depth[_LABEL]/image
   ::ros::Publisher cmd_, path_, status_, pose_, tf_;
   std::optional<SensorParams> lidar_;
   const ::ros::WallTime wall0_ = ::ros::WallTime::now();
@@ -139,7 +141,8 @@ void NavigateNode::onScan(const sensor_msgs::LaserScan& m) {
 }
 
 // Other lidars and range arrays on scan_LABEL (as the bridge's scan lines),
-// the first depth camera on `points`, others on points_LABEL.
+// the first depth camera on `points` or `depth/image` + `depth/camera_info`,
+// others on points_LABEL or depth_LABEL/...
 void NavigateNode::subscribeOthers() {
   bool points = false;
   for (const auto& sp : s_.setup().sensors) {
@@ -149,9 +152,12 @@ void NavigateNode::subscribeOthers() {
           "scan_" + sp.label, 5,
           [this, sp](const sensor_msgs::LaserScan::ConstPtr& m) { onOtherScan(sp, *m); }));
     } else if (sp.type == "depth-camera") {
-      others_.push_back(nh_.subscribe<sensor_msgs::PointCloud2>(
-          points ? "points_" + sp.label : "points", 2,
-          [this, sp](const sensor_msgs::PointCloud2::ConstPtr& m) { onPoints(sp, *m); }));
+      const mrpt::poses::CPose3D pose(sp.x, sp.y, sp.z, mrpt::DEG2RAD(sp.yaw),
+                                      mrpt::DEG2RAD(sp.pitch), mrpt::DEG2RAD(sp.roll));
+      depths_.push_back(std::make_unique<DepthTopics>(
+          nh_, points ? "points_" + sp.label : "points", points ? "depth_" + sp.label : "depth", 2,
+          sp.label, pose,
+          [this](const auto& obs, const ::ros::Time& stamp) { onDepth(obs, stamp); }));
       points = true;
     }
   }
@@ -168,13 +174,10 @@ void NavigateNode::onOtherScan(const SensorParams& sp, const sensor_msgs::LaserS
   s_.observation(navigation::bridgeObservation(b, sp), odom_pose_, b.t);
 }
 
-// A cloud in the sensor's frame (x forward, y left, z up: the profile's
-// pose places it) as a depth observation for perception.
-void NavigateNode::onPoints(const SensorParams& sp, const sensor_msgs::PointCloud2& m) {
-  if (!have_odom_) return;
-  const mrpt::poses::CPose3D pose(sp.x, sp.y, sp.z, mrpt::DEG2RAD(sp.yaw), mrpt::DEG2RAD(sp.pitch),
-                                  mrpt::DEG2RAD(sp.roll));
-  if (auto o = cloudFromRos(m, sp.label, pose)) s_.observation(o, odom_pose_, t(m.header.stamp));
+// A depth camera's frame (placed by the profile's pose) for perception.
+void NavigateNode::onDepth(const mrpt::obs::CObservation3DRangeScan::Ptr& o,
+                           const ::ros::Time& stamp) {
+  if (have_odom_) s_.observation(o, odom_pose_, t(stamp));
 }
 
 void NavigateNode::onOdom(const nav_msgs::Odometry& m) {

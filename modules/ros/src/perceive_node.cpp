@@ -5,6 +5,7 @@
 #include <carenav/perception/pipeline.h>
 #include <carenav/ros/nodes.h>
 
+#include "depth_topics.h"
 #include "msg_convert.h"
 #include "node_common.h"
 
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <memory>
 
 namespace carenav::ros {
 
@@ -26,9 +28,9 @@ class PerceiveNode {
                const perception::PerceptionParams& p, std::string label,
                const mrpt::poses::CPose3D& pose)
       : o_(o), pipe_(pipe), p_(p), label_(std::move(label)), pose_(pose) {
-    points_ = nh_.subscribe("points", 1, &PerceiveNode::onPoints, this);
-    image_ = nh_.subscribe("depth/image", 1, &PerceiveNode::onImage, this);
-    info_sub_ = nh_.subscribe("depth/camera_info", 1, &PerceiveNode::onInfo, this);
+    depth_ = std::make_unique<DepthTopics>(
+        nh_, "points", "depth", 1, label_, pose_,
+        [this](const auto& obs, const ::ros::Time& stamp) { frame(*obs, stamp); });
     odom_ = nh_.subscribe("odom", 20, &PerceiveNode::onOdom, this);
     grid_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("local_grid", 2);
     scan_pub_ = nh_.advertise<sensor_msgs::LaserScan>("virtual_scan", 5);
@@ -36,14 +38,6 @@ class PerceiveNode {
   size_t frames() const { return frames_; }
 
  private:
-  void onPoints(const sensor_msgs::PointCloud2& m) {
-    if (auto obs = cloudFromRos(m, label_, pose_)) frame(*obs, m.header.stamp);
-  }
-  void onInfo(const sensor_msgs::CameraInfo& m) { info_ = m; }
-  void onImage(const sensor_msgs::Image& m) {
-    if (!info_) return;  // no intrinsics yet
-    if (auto obs = depthFromRos(m, *info_, label_, pose_)) frame(*obs, m.header.stamp);
-  }
   void onOdom(const nav_msgs::Odometry& m) {
     const auto& p = m.pose.pose;
     odo_ = mrpt::poses::CPose2D(p.position.x, p.position.y, yawOf(p.orientation));
@@ -59,9 +53,9 @@ class PerceiveNode {
   const std::string label_;
   const mrpt::poses::CPose3D pose_;
   ::ros::NodeHandle nh_;
-  ::ros::Subscriber points_, image_, info_sub_, odom_;
+  std::unique_ptr<DepthTopics> depth_;  // points, depth/image + depth/camera_info
+  ::ros::Subscriber odom_;
   ::ros::Publisher grid_pub_, scan_pub_;
-  std::optional<sensor_msgs::CameraInfo> info_;
   mrpt::poses::CPose2D odo_;  // identity until odometry arrives
   bool have_odom_ = false;
   size_t frames_ = 0;

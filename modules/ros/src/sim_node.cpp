@@ -17,6 +17,8 @@
 #include <ros/ros.h>
 #include <rosbag/bag.h>
 #include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/LaserScan.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
@@ -98,7 +100,8 @@ class SimNode {
  public:
   SimNode(const SimNodeOptions& o, sim::Simulator& sim) : o_(o), sim_(sim) {
     // The first lidar2d on `scan`, other lidars and range arrays on
-    // `scan_LABEL`; the first depth camera on `points`, others `points_LABEL`.
+    // `scan_LABEL`; the first depth camera on `points`, others `points_LABEL`
+    // (with --depth: `depth/image` + `depth/camera_info`, `depth_LABEL/...`).
     bool scan = false, points = false;
     for (const auto& s : sim.sensors()) {
       poses_[s.label] = CPose3D(s.x, s.y, s.z, mrpt::DEG2RAD(s.yaw), mrpt::DEG2RAD(s.pitch),
@@ -108,6 +111,11 @@ class SimNode {
         scan = scan || first;
         pubs_[s.label] =
             nh_.advertise<sensor_msgs::LaserScan>(first ? "scan" : "scan_" + s.label, 10);
+      } else if (s.type == "depth-camera" && o.depth_images) {
+        const std::string ns = points ? "depth_" + s.label + "/" : "depth/";
+        pubs_[s.label] = nh_.advertise<sensor_msgs::Image>(ns + "image", 2);
+        info_pubs_[s.label] = nh_.advertise<sensor_msgs::CameraInfo>(ns + "camera_info", 2);
+        points = true;
       } else if (s.type == "depth-camera") {
         pubs_[s.label] =
             nh_.advertise<sensor_msgs::PointCloud2>(points ? "points_" + s.label : "points", 2);
@@ -135,6 +143,9 @@ class SimNode {
     last_cmd_ = ::ros::WallTime::now();
   }
   void publish(const sim::SimFrame& f, const ::ros::Time& now);
+  /** A sensor's observation on its topic; false when it is of no type published. */
+  bool sendObservation(const mrpt::obs::CObservation::Ptr& obs, ::ros::Publisher& pub,
+                       const ::ros::Time& now);
   /** Publishes `m` and records it (when recording). */
   template <class M>
   void send(::ros::Publisher& p, const M& m, const ::ros::Time& now) {
@@ -149,7 +160,8 @@ class SimNode {
   const SimNodeOptions& o_;
   sim::Simulator& sim_;
   ::ros::NodeHandle nh_;
-  std::map<std::string, ::ros::Publisher> pubs_;  // by sensor label
+  std::map<std::string, ::ros::Publisher> pubs_;       // by sensor label
+  std::map<std::string, ::ros::Publisher> info_pubs_;  // depth images' CameraInfo, by label
   std::map<std::string, CPose3D> poses_;
   std::map<std::string, double> fov_;
   ::ros::Publisher odom_, truth_, tf_, clock_;
@@ -182,32 +194,52 @@ geometry_msgs::TransformStamped SimNode::link(const std::string& parent, const s
   return t;
 }
 
+// tf first (odom -> base_link, base_link -> each sensor, a depth camera's
+// optical frame), so a bag places every sensor message by the tf before it.
 void SimNode::publish(const sim::SimFrame& f, const ::ros::Time& now) {
   send(odom_, odometry(f.odometry, o_.odom_frame, now), now);
   send(truth_, odometry(f.truth, o_.map_frame, now), now);
   tf2_msgs::TFMessage tf;
   tf.transforms.push_back(link(o_.odom_frame, o_.base_frame,
                                CPose3D(f.odometry.x, f.odometry.y, 0, f.odometry.yaw, 0, 0), now));
+  std::vector<std::pair<mrpt::obs::CObservation::Ptr, ::ros::Publisher*>> sent;
   for (const auto& obs : f.observations) {
     const auto pub = pubs_.find(obs->sensorLabel);
     if (pub == pubs_.end()) continue;
-    // Each in its own frame (the sensor label): the sensor pose goes to tf.
-    if (auto scan = std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs)) {
-      auto m = scanToRos(*scan, scan->sensorLabel);
-      m.header.stamp = now;
-      send(pub->second, m, now);
-    } else if (auto ra = std::dynamic_pointer_cast<mrpt::obs::CObservationRange>(obs)) {
-      auto m = rangeArrayToRos(*ra, fov_[ra->sensorLabel]);
-      m.header.stamp = now;
-      send(pub->second, m, now);
-    } else if (auto cloud = perception::cloudFromObservation(*obs, CPose3D())) {
-      send(pub->second, cloudToRos(*cloud, obs->sensorLabel, now), now);
-    } else {
-      continue;
-    }
-    tf.transforms.push_back(link(o_.base_frame, obs->sensorLabel, poses_[obs->sensorLabel], now));
+    const std::string& label = obs->sensorLabel;
+    tf.transforms.push_back(link(o_.base_frame, label, poses_[label], now));
+    if (info_pubs_.count(label))
+      tf.transforms.push_back(link(label, label + "_optical", opticalInBody(), now));
+    sent.emplace_back(obs, &pub->second);
   }
   send(tf_, tf, now);
+  for (const auto& [obs, pub] : sent) sendObservation(obs, *pub, now);
+}
+
+// Each in its own frame (the sensor label; a depth image in LABEL_optical).
+bool SimNode::sendObservation(const mrpt::obs::CObservation::Ptr& obs, ::ros::Publisher& pub,
+                              const ::ros::Time& now) {
+  if (auto scan = std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs)) {
+    auto m = scanToRos(*scan, scan->sensorLabel);
+    m.header.stamp = now;
+    send(pub, m, now);
+  } else if (auto ra = std::dynamic_pointer_cast<mrpt::obs::CObservationRange>(obs)) {
+    auto m = rangeArrayToRos(*ra, fov_[ra->sensorLabel]);
+    m.header.stamp = now;
+    send(pub, m, now);
+  } else if (const auto info = info_pubs_.find(obs->sensorLabel); info != info_pubs_.end()) {
+    auto depth = std::dynamic_pointer_cast<mrpt::obs::CObservation3DRangeScan>(obs);
+    sensor_msgs::Image img;
+    sensor_msgs::CameraInfo cam;
+    if (!depth || !depthToRos(*depth, obs->sensorLabel + "_optical", now, img, cam)) return false;
+    send(info->second, cam, now);
+    send(pub, img, now);
+  } else if (auto cloud = perception::cloudFromObservation(*obs, CPose3D())) {
+    send(pub, cloudToRos(*cloud, obs->sensorLabel, now), now);
+  } else {
+    return false;
+  }
+  return true;
 }
 
 void SimNode::run() {

@@ -4,10 +4,10 @@
 #include <carenav/common/errors.h>
 #include <carenav/ros/nodes.h>
 #include <carenav/slam/mapper.h>
+#include <carenav/slam/slam_job.h>
 
 #include "msg_convert.h"
 #include "node_common.h"
-#include "slam_outputs.h"
 
 #include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Odometry.h>
@@ -39,7 +39,10 @@ class SlamNode {
   }
   /** The outputs of the run so far (after mapper.finish() at the end);
    *  "seconds" in summary.json: the mapper's time on the scans. */
-  void save() { writeSlamOutputs(mapper_, job_, res_); }
+  void save() {
+    slam::writeSlamOutputs(mapper_, job_, res_,
+                           "carenav ros slam " + job_.method + ": " + job_.rawlog);
+  }
   size_t steps() const { return res_.steps; }
 
  private:

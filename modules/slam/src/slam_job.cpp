@@ -43,7 +43,50 @@ void writeSimpleMap(const mrpt::maps::CSimpleMap& sm, const std::string& path) {
   fs::rename(tmp, path);
 }
 
+void writePicture(const mrpt::maps::COccupancyGridMap2D& grid, const io::Trajectory2D& traj,
+                  const std::string& title, const std::string& path) {
+  io::RenderOptions ro;
+  ro.crop_to_known = true;
+  ro.title = title;
+  io::Overlay track;
+  for (const auto& p : traj) track.points.push_back({p.x, p.y});
+  track.colour = {220, 30, 30};
+  track.thickness = 2;
+  track.start_end_markers = true;
+  ro.overlays.push_back(track);
+  io::renderGridMapPng(grid, path, ro);
+}
+
 }  // namespace
+
+void writeSlamOutputs(const Mapper& mapper, const SlamJobOptions& o, SlamJobResult& res,
+                      const std::string& title) {
+  res.stats = mapper.stats();
+  res.final_pose = mapper.pose();
+  res.final_cov = mapper.covariance();
+  res.outputs.clear();
+  fs::create_directories(o.out_dir);
+  auto out = [&](const std::string& name) {
+    const std::string p = (fs::path(o.out_dir) / name).string();
+    res.outputs.push_back(p);
+    return p;
+  };
+  const auto sm = mapper.simpleMap();
+  writeSimpleMap(sm, out("map.simplemap"));
+  const auto traj = mapper.trajectory();
+  io::writeTum(out("trajectory.tum"), traj);
+  const auto grid = gridFromSimpleMap(sm, o.mapper.slam.grid_resolution);
+  io::saveGridMap(grid, out("map.gridmap.gz"));
+  io::writeRosMap(grid, out("map.yaml"));
+  res.outputs.push_back((fs::path(o.out_dir) / "map.pgm").string());
+  writePicture(grid, traj, title, out("map.png"));
+  const std::string summary = out("summary.json");
+  {
+    std::ofstream f(summary + ".tmp");
+    f << res.summaryJson(o);
+  }
+  fs::rename(summary + ".tmp", summary);
+}
 
 SlamJobResult runSlam(const SlamJobOptions& o) {
   SlamJobResult res;
@@ -78,40 +121,8 @@ SlamJobResult runSlam(const SlamJobOptions& o) {
   }
   mapper->finish();
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  res.stats = mapper->stats();
-  res.final_pose = mapper->pose();
-  res.final_cov = mapper->covariance();
-
-  fs::create_directories(o.out_dir);
-  auto out = [&](const std::string& name) {
-    const std::string p = (fs::path(o.out_dir) / name).string();
-    res.outputs.push_back(p);
-    return p;
-  };
-  const auto sm = mapper->simpleMap();
-  writeSimpleMap(sm, out("map.simplemap"));
-  const auto traj = mapper->trajectory();
-  io::writeTum(out("trajectory.tum"), traj);
-  const auto grid = gridFromSimpleMap(sm, o.mapper.slam.grid_resolution);
-  io::saveGridMap(grid, out("map.gridmap.gz"));
-  io::writeRosMap(grid, out("map.yaml"));
-  res.outputs.push_back((fs::path(o.out_dir) / "map.pgm").string());
-  io::RenderOptions ro;
-  ro.crop_to_known = true;
-  ro.title = "carenav slam " + o.method + ": " + fs::path(o.rawlog).filename().string();
-  io::Overlay track;
-  for (const auto& p : traj) track.points.push_back({p.x, p.y});
-  track.colour = {220, 30, 30};
-  track.thickness = 2;
-  track.start_end_markers = true;
-  ro.overlays.push_back(track);
-  io::renderGridMapPng(grid, out("map.png"), ro);
-  const std::string summary = out("summary.json");
-  {
-    std::ofstream f(summary + ".tmp");
-    f << res.summaryJson(o);
-  }
-  fs::rename(summary + ".tmp", summary);
+  writeSlamOutputs(*mapper, o, res,
+                   "carenav slam " + o.method + ": " + fs::path(o.rawlog).filename().string());
   return res;
 }
 

@@ -94,3 +94,51 @@ TEST(RosMsgConvert, CloudDropsNonFinitePoints) {
 }
 
 }  // namespace
+
+// A simulated depth frame as a 16UC1 Image + CameraInfo and back: the same
+// range image and intrinsics (what `ros sim --depth` publishes and a bag of
+// it imports as).
+TEST(RosMsgConvert, DepthObservationRoundTrip) {
+  auto o = mrpt::obs::CObservation3DRangeScan::Create();
+  o->hasRangeImage = true;
+  o->range_is_depth = true;
+  o->rangeUnits = 0.001f;
+  o->rangeImage_setSize(4, 5);
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 5; ++c) o->rangeImage(r, c) = static_cast<uint16_t>(r * 1000 + c * 7);
+  o->cameraParams.ncols = 5;
+  o->cameraParams.nrows = 4;
+  o->cameraParams.setIntrinsicParamsFromValues(4.5, 3.5, 2.0, 1.5);
+  sensor_msgs::Image img;
+  sensor_msgs::CameraInfo info;
+  ASSERT_TRUE(carenav::ros::depthToRos(*o, "cam_optical", ::ros::Time(12, 5), img, info));
+  EXPECT_EQ(img.encoding, "16UC1");
+  EXPECT_EQ(img.header.frame_id, "cam_optical");
+  EXPECT_EQ(info.header.stamp, ::ros::Time(12, 5));
+  const auto back = depthFromRos(img, info, "cam", mrpt::poses::CPose3D());
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->rangeImage, o->rangeImage);
+  EXPECT_DOUBLE_EQ(back->cameraParams.fx(), 4.5);
+  EXPECT_DOUBLE_EQ(back->cameraParams.fy(), 3.5);
+  EXPECT_DOUBLE_EQ(back->cameraParams.cx(), 2.0);
+  EXPECT_DOUBLE_EQ(back->cameraParams.cy(), 1.5);
+  auto none = mrpt::obs::CObservation3DRangeScan::Create();
+  EXPECT_FALSE(carenav::ros::depthToRos(*none, "cam", ::ros::Time(1), img, info));
+}
+
+// The optical frame (z ahead, x right, y down) in the body frame (x ahead,
+// y left, z up), and a camera's name from its optical frame's.
+TEST(RosMsgConvert, OpticalFrame) {
+  const auto R = carenav::ros::opticalInBody();
+  mrpt::math::TPoint3D ahead, right, down;
+  R.composePoint({0, 0, 1}, ahead);
+  R.composePoint({1, 0, 0}, right);
+  R.composePoint({0, 1, 0}, down);
+  EXPECT_NEAR(ahead.x, 1, 1e-12);
+  EXPECT_NEAR(right.y, -1, 1e-12);
+  EXPECT_NEAR(down.z, -1, 1e-12);
+  EXPECT_EQ(carenav::ros::cameraOfOpticalFrame("kinect_optical"), "kinect");
+  EXPECT_EQ(carenav::ros::cameraOfOpticalFrame("camera_depth_optical_frame"), "camera_depth");
+  EXPECT_EQ(carenav::ros::cameraOfOpticalFrame("kinect"), "kinect");
+  EXPECT_EQ(carenav::ros::cameraOfOpticalFrame("_optical"), "_optical");
+}

@@ -25,6 +25,16 @@ struct BagReadOptions {
    *  frame), each optionally "TOPIC=LABEL" as for scans; empty: every
    *  PointCloud2 topic; {"none"}: none. */
   std::vector<std::string> clouds;
+  /** sensor_msgs/Image depth topics (16UC1 / mono16 in mm, 32FC1 in m),
+   *  each optionally "TOPIC=LABEL" (default label: the image's frame_id
+   *  without a trailing `_optical_frame` / `_optical`, else the topic). Each
+   *  is unprojected with the last CameraInfo of its sibling topic
+   *  (`/cam/depth/image_raw` -> `/cam/depth/camera_info`) or of
+   *  camera_infos[i]. Empty: every Image topic in 16UC1 or 32FC1 whose
+   *  sibling has a CameraInfo; {"none"}: none. */
+  std::vector<std::string> depths;
+  /** The CameraInfo topic of each of `depths`, in order; empty: the siblings. */
+  std::vector<std::string> camera_infos;
   /** Odometry: a nav_msgs/Odometry topic, "tf" (the odom_frame ->
    *  base_frame transform of /tf), "none", or "" (the first Odometry topic
    *  of the bag, else tf). */
@@ -39,19 +49,26 @@ struct BagReadOptions {
 
 /** What reading a bag met beyond the observations it gave. */
 struct BagReadNotes {
-  size_t messages = 0;                        ///< bag messages read (every topic)
-  size_t scans = 0;                           ///< laser scans given out
-  size_t odometry = 0;                        ///< odometry readings given out
-  size_t skipped = 0;                         ///< messages of topics not read
-  size_t scans_no_tf = 0;                     ///< scans whose frame tf did not place on the robot
-  size_t clouds = 0;                          ///< point clouds given out
-  size_t clouds_no_tf = 0;                    ///< clouds whose frame tf did not place
+  size_t messages = 0;      ///< bag messages read (every topic)
+  size_t scans = 0;         ///< laser scans given out
+  size_t odometry = 0;      ///< odometry readings given out
+  size_t skipped = 0;       ///< messages of topics not read
+  size_t scans_no_tf = 0;   ///< scans whose frame tf did not place on the robot
+  size_t clouds = 0;        ///< point clouds given out
+  size_t clouds_no_tf = 0;  ///< clouds whose frame tf did not place
+  size_t depth_images = 0;  ///< depth images given out
+  size_t depth_no_tf = 0;   ///< depth images whose frame tf did not place
+  /** Depth images left out: no CameraInfo before them, or not decodable
+   *  (an encoding other than 16UC1 / mono16 / 32FC1, a short buffer). */
+  size_t depth_dropped = 0;
   std::map<std::string, std::string> topics;  ///< topic -> type, as met
 };
 
 /** A bag as an observation source (rawlog_formats.h): CObservation2DRangeScan,
- *  CObservation3DRangeScan (clouds as points in the sensor frame, the
- *  sensor pose from tf) and CObservationOdometry (label "odometry") in the
+ *  CObservation3DRangeScan (clouds as points in the sensor frame, depth
+ *  images as range images with their intrinsics; the sensor pose from tf:
+ *  an image's optical frame turned to the camera's body frame) and
+ *  CObservationOdometry (label "odometry") in the
  *  bag's order, stamped
  *  with the messages' header stamps. Throws InputError when the file is not
  *  a bag; a bag broken further on throws io::RawlogError from next() naming

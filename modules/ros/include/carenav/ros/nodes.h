@@ -33,6 +33,10 @@ struct SimNodeOptions {
   /** A bag of what the node publishes (odom, scans, tf, ground_truth), as
    *  `rosbag record` would write it (rosbag storage); empty: none. */
   std::string record;
+  /** Depth cameras publish depth images (`depth/image`, sensor_msgs/Image
+   *  16UC1 in mm, in the optical frame `LABEL_optical`) and their
+   *  `depth/camera_info` instead of `points` clouds (others: `depth_LABEL/`). */
+  bool depth_images = false;
   std::string odom_frame = "odom", base_frame = "base_link", map_frame = "map";
   std::vector<std::string> ros_args;
   const std::atomic<bool>* stop = nullptr;
@@ -79,14 +83,20 @@ navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o);
  *  `localize` command's Localizer). Subscribes `scan`, `odom`, `initialpose`
  *  (geometry_msgs/PoseWithCovarianceStamped: starts again there); publishes
  *  `amcl_pose` (geometry_msgs/PoseWithCovarianceStamped, amcl's convention),
- *  `particlecloud` (geometry_msgs/PoseArray) and `map -> odom` on `tf`. */
+ *  `particlecloud` (geometry_msgs/PoseArray) and `map -> odom` on `tf`.
+ *  Starts at `start`, in a room (`in_room`, else the `~in_room` parameter)
+ *  or globally. */
 struct LocalizeNodeOptions {
   std::string profile;
   std::vector<std::string> sets;
   std::string map, world;                    ///< the map (as navigate)
-  std::optional<navigation::TPose2D> start;  ///< else a global start
-  double duration = 0;                       ///< s; 0: until stopped
-  size_t cloud_max = 500;                    ///< particles published at most
+  std::optional<navigation::TPose2D> start;  ///< else a room, else a global start
+  /** A room of the places file: particles over its free cells only (as
+   *  `carenav localize --in-room`); empty: the `~in_room` parameter, if any. */
+  std::string in_room;
+  std::string places;      ///< places file for the room; empty: the one beside the map/world
+  double duration = 0;     ///< s; 0: until stopped
+  size_t cloud_max = 500;  ///< particles published at most
   std::string odom_frame = "odom", map_frame = "map";
   std::vector<std::string> ros_args;
   const std::atomic<bool>* stop = nullptr;

@@ -38,6 +38,17 @@ struct SlamJobResult {
  *  InputError when nothing could be mapped (no usable 2D scan). */
 SlamJobResult runSlam(const SlamJobOptions& o);
 
+/** Writes the outputs of `carenav slam` for `mapper` to o.out_dir (created):
+ *  map.simplemap, trajectory.tum, map.gridmap.gz, map.yaml + map.pgm,
+ *  map.png (the grid with the trajectory, headed `title`) and summary.json
+ *  (o.rawlog names the source). `res` holds the run's counts and first
+ *  pose; it gets the mapper's stats, final pose and covariance, and the
+ *  files written (its outputs, replaced). The simple map and the summary are
+ *  written aside and renamed. runSlam calls it at the end of the rawlog, the
+ *  ROS slam node at each save. */
+void writeSlamOutputs(const Mapper& mapper, const SlamJobOptions& o, SlamJobResult& res,
+                      const std::string& title);
+
 /** A grid built by inserting each frame of the simple map at its pose. */
 mrpt::maps::COccupancyGridMap2D gridFromSimpleMap(const mrpt::maps::CSimpleMap& sm,
                                                   double resolution);
