@@ -616,14 +616,17 @@ void Localizer::updateChallenger(double tracker_log_w_avg) {
   weighEvidence(log_evidence, tracker_log_w_avg);
 }
 
-// While the challenger's mean is more than lost_spread from the estimate,
+// While the challenger is one place (spread at most lost_spread: not a search
+// over the map, whose best of many random poses may fit a scan the map
+// explains poorly better than the right pose does) more than lost_spread
+// from the estimate,
 // the log Bayes factor of each scan (the log of its mean observation
 // likelihood under the challenger minus under the estimate) is kept, the
 // latest recovery_patience of them.
 void Localizer::weighEvidence(double challenger_log_w_avg, double tracker_log_w_avg) {
   const double apart =
       std::hypot(challenger_.mean.x() - mean_.x(), challenger_.mean.y() - mean_.y());
-  if (apart > p_.lost_spread) {
+  if (challenger_.spread <= p_.lost_spread && apart > p_.lost_spread) {
     ++challenger_.away;
     challenger_.log_factors.push_back(challenger_log_w_avg - tracker_log_w_avg);
     if (challenger_.log_factors.size() > static_cast<size_t>(std::max(1, p_.recovery_patience)))
@@ -634,13 +637,12 @@ void Localizer::weighEvidence(double challenger_log_w_avg, double tracker_log_w_
   }
 }
 
-// Away from the estimate for recovery_patience updates and the scans of those
-// updates likelier under the challenger (a Bayes factor above 1): the
-// estimate is lost and the challenger takes over, converged or still
-// searching. A converged challenger that does not win then (a look-alike that
-// explains less), or that converged on the estimate, is dropped; so is one
-// still searching once the estimate has been consistent again for
-// recovery_patience updates.
+// One place away from the estimate for recovery_patience updates and the
+// scans of those updates likelier under the challenger (a Bayes factor above
+// 1): the estimate is lost and the challenger takes over. A converged one
+// that does not win then (a look-alike that explains less), or that
+// converged on the estimate, is dropped; so is one still searching once the
+// estimate has been consistent again for recovery_patience updates.
 void Localizer::judgeChallenge() {
   const int patience = std::max(1, p_.recovery_patience);
   double log_factor = 0;
@@ -654,8 +656,7 @@ void Localizer::judgeChallenge() {
 }
 
 // The estimate was wrong: a loss now. The challenger's cloud is the filter
-// from here: a global search still, or converged (the next update reports the
-// recovery).
+// from here (once converged, an update reports the recovery).
 void Localizer::adoptChallenger() {
   events_.push_back({LocalizationEvent::Kind::Loss, last_t_, spread_});
   std::swap(mcl_.m_particles, challenger_.particles);
