@@ -88,10 +88,11 @@ struct LocalizationParams {
   double consistent_beams = 0.7;
   /** How a converged filter recovers (with recovery on). true: no random
    *  particle ever joins a converged cloud; when the map contradicts its
-   *  estimate, or its likelihood stays low, for recovery_patience updates, a
-   *  challenger (a global search, global_particles random poses, the global
-   *  phase's tempering and roughening) runs beside it on the same scans. A
-   *  loss is declared only when the challenger converges more than
+   *  estimate recovery_patience updates in a row (or its likelihood was low
+   *  that long and the map contradicts it now), a challenger (a global
+   *  search, global_particles random poses, the global phase's tempering and
+   *  roughening) runs beside it on the same scans. A loss is declared only
+   *  when the challenger is one place (spread at most lost_spread) more than
    *  lost_spread away and explains the scans better (a larger mean
    *  observation likelihood, summed over recovery_patience updates: a Bayes
    *  factor) than the estimate; it then takes the estimate's place. A
