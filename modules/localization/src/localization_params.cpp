@@ -69,13 +69,20 @@ const ParamTable<LocalizationParams>& LocalizationParams::table() {
           .real("recovery_ratio", &P::recovery_ratio, "", 0, 1,
                 "recovery guard: an update whose w_fast/w_slow is below this counts as low")
           .integer("recovery_patience", &P::recovery_patience, "", 1, 1000,
-                   "recovery guard: consecutive low updates (or updates of a tight cloud that "
-                   "disagrees with the map) before random particles are injected")
+                   "recovery guard: consecutive updates a converged estimate is contradicted by "
+                   "the map or has a low likelihood before it is challenged (challenge) or "
+                   "given random particles; also the updates a challenger must explain the "
+                   "scans better before it takes over")
           .real("consistent_beams", &P::consistent_beams, "", 0, 1,
-                "recovery guard: a tight cloud whose estimate sees at least this share of beams "
-                "not passing through a mapped obstacle is consistent and gets no random "
-                "particles; one that disagrees recovery_patience updates in a row is lost and a "
-                "global search replaces it (0: no consistency rule)")
+                "recovery guard: a converged estimate that sees at least this share of beams "
+                "not passing through a mapped obstacle is consistent with the map; one that is "
+                "not, recovery_patience updates in a row, is challenged (challenge false: "
+                "lost, a global search replaces it) (0: no consistency rule)")
+          .flag("challenge", &P::challenge,
+                "recovery guard: a contradicted converged estimate is challenged by a global "
+                "search run beside it, and lost only when that search converges elsewhere and "
+                "explains the scans better; never random particles in a converged cloud "
+                "(false: the earlier guard, restart and augmented MCL injections)")
           .integer("min_returns", &P::min_returns, "", 0, 100000,
                    "a scan with fewer returns in range is not weighed: the estimate follows "
                    "odometry alone (dead reckoning) until a scan with enough returns (0: weigh "

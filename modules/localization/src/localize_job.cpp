@@ -132,7 +132,7 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
     r.covs.push_back(sr.cov);
     if (sr.updated)
       r.records.push_back({t, sr.particles, sr.spread, sr.likelihood_ratio, sr.seconds, sr.injected,
-                           sr.beta, sr.resampled, sr.agreement});
+                           sr.beta, sr.resampled, sr.agreement, sr.challenger_spread});
     if (tty && r.scans % 10 == 0)
       std::cerr << "\r[localize] scan " << r.scans << ", " << sr.particles << " particles, spread "
                 << sr.spread << " m   " << std::flush;
@@ -148,6 +148,8 @@ LocalizeJobResult runLocalize(const LocalizeJobOptions& o) {
   }
   r.updates = loc.updates();
   r.injections = loc.injections();
+  r.challenges = loc.challenges();
+  r.challenges_won = loc.challengesWon();
   r.rotate_requests = loc.rotateRequests();
   r.rotate_enabled = o.params.rotate_request;
   r.events = loc.events();
@@ -245,6 +247,8 @@ std::string LocalizeJobResult::summaryJson(const LocalizeJobOptions& o) const {
         return e.kind == LocalizationEvent::Kind::Loss;
       })));
   j.key("injections").value(static_cast<uint64_t>(injections));
+  j.key("challenges").value(static_cast<uint64_t>(challenges));
+  j.key("challenges_won").value(static_cast<uint64_t>(challenges_won));
   j.key("events").beginArray();
   for (const auto& e : events) {
     j.beginObject();
@@ -294,6 +298,7 @@ std::string LocalizeJobResult::summaryJson(const LocalizeJobOptions& o) const {
     j.key("injected").value(static_cast<uint64_t>(rec.injected));
     j.key("beta").value(rec.beta).key("resampled").value(rec.resampled);
     j.key("agreement").value(rec.agreement);
+    j.key("challenger_spread").value(rec.challenger_spread);
     j.key("ms").value(1000 * rec.seconds);
     j.endObject();
   }

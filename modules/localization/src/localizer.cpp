@@ -6,6 +6,7 @@
 
 #include <mrpt/bayes/CParticleFilter.h>
 #include <mrpt/core/bits_math.h>
+#include <mrpt/math/wrap2pi.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/random/RandomGenerators.h>
 
@@ -67,6 +68,7 @@ Localizer::Localizer(const COccupancyGridMap2D& map, const LocalizationParams& p
                      std::to_string(p_.free_threshold) + "): nothing to localise in");
 
   mcl_.options.metricMap = map_;
+  own_rng_.seed(static_cast<uint32_t>(p_.seed));
   field_ = LikelihoodField(*map_, p_);
   mrpt::random::getRandomGenerator().randomize(static_cast<uint32_t>(p_.seed));
   GaussianCache::clear(mrpt::random::getRandomGenerator());
@@ -232,7 +234,8 @@ void Localizer::initUniform(const std::vector<size_t>& cells) {
 
 void Localizer::resetTracking() {
   converged_ = ever_converged_ = false;
-  low_updates_ = disagree_updates_ = 0;
+  low_updates_ = disagree_updates_ = consistent_updates_ = 0;
+  closeChallenge();
   pending_ = CPose2D();
   rotate_.reset(last_t_);
 }
@@ -325,22 +328,73 @@ void Localizer::predict(const MotionSampler& motion, bool resample) {
   }
 }
 
-// ll_: log p(z|x) per particle.
+// While a challenger runs, the estimate's filter draws from a generator of
+// its own (own_rng_), so that the challenger's global search, which draws
+// from MRPT's, is the search a loss declared when it opened would have run.
+// Every particle is moved by the motion model (the draw MotionSampler makes,
+// from own_rng_); below resample_ess the set is first redrawn by systematic
+// resampling, same size. Returns whether it resampled.
+bool Localizer::predictOwn(const MotionSampler& motion) {
+  auto& parts = mcl_.m_particles;
+  const bool resample = effectiveSampleRatio() < p_.resample_ess;
+  if (resample && !parts.empty()) {
+    std::vector<double> cum(parts.size());
+    double sum = 0;
+    for (size_t i = 0; i < parts.size(); ++i) cum[i] = sum += std::exp(parts[i].log_w);
+    const double step = sum / static_cast<double>(parts.size());
+    double u = std::uniform_real_distribution<double>(0, step)(own_rng_);
+    mrpt::poses::CPosePDFParticles::CParticleList drawn(parts.size());
+    size_t j = 0;
+    for (auto& part : drawn) {
+      while (j + 1 < parts.size() && cum[j] < u) ++j;
+      part.d = parts[j].d;
+      part.log_w = 0;
+      u += step;
+    }
+    parts.swap(drawn);
+  }
+  std::normal_distribution<double> normal;
+  prior_.clear();
+  for (auto& part : parts) {
+    double r[3] = {0, 0, 0};
+    for (int i = 0; i < 3; ++i) {
+      const double n = normal(own_rng_);
+      for (int d = 0; d < 3; ++d) r[d] += motion.z(d, i) * n;
+    }
+    const mrpt::math::TPose2D inc(motion.mean.x + r[0], motion.mean.y + r[1],
+                                  mrpt::math::wrapToPi(motion.mean.phi + r[2]));
+    part.d = MotionSampler::compose(part.d, inc);
+    prior_.push_back(part.log_w);
+  }
+  return resample;
+}
+
+// The scan's points (decimated for the likelihood, all of them for the
+// agreement), then ll_ for every particle.
 void Localizer::weighScan(const mrpt::obs::CObservation2DRangeScan& scan) {
-  const size_t n = mcl_.m_particles.size();
-  ll_.resize(n);
-  if (!scan.isPlanarScan(map_->insertionOptions.horizontalTolerance)) {
-    std::fill(ll_.begin(), ll_.end(), -10.0);  // as MRPT: a tilted scan says nothing
+  scan_planar_ = scan.isPlanarScan(map_->insertionOptions.horizontalTolerance);
+  if (!scan_planar_) {
     pts_x_.clear();
     pts_y_.clear();
     all_x_.clear();
     all_y_.clear();
+  } else {
+    field_.scanPoints(scan, pts_x_, pts_y_);
+    field_.scanPoints(scan, all_x_, all_y_, 1);
+    sensor_x_ = scan.sensorPose.x();
+    sensor_y_ = scan.sensorPose.y();
+  }
+  weighParticles();
+}
+
+// ll_: log p(z|x) per particle of the latest scan (weighScan).
+void Localizer::weighParticles() {
+  const size_t n = mcl_.m_particles.size();
+  ll_.resize(n);
+  if (!scan_planar_) {
+    std::fill(ll_.begin(), ll_.end(), -10.0);  // as MRPT: a tilted scan says nothing
     return;
   }
-  field_.scanPoints(scan, pts_x_, pts_y_);
-  field_.scanPoints(scan, all_x_, all_y_, 1);
-  sensor_x_ = scan.sensorPose.x();
-  sensor_y_ = scan.sensorPose.y();
   for (size_t i = 0; i < n; ++i) {
     const auto& d = mcl_.m_particles[i].d;
     ll_[i] = field_.logLikelihood(pts_x_, pts_y_, d.x, d.y, d.phi);
@@ -434,10 +488,17 @@ size_t Localizer::restartSearch() {
   return n;
 }
 
-// Augmented MCL's recovery behind the guard above, or lost_inject_fraction
-// just after a loss.
 void Localizer::recover(bool lost_now, StepResult& r) {
   if (!p_.recovery) return;
+  if (p_.challenge)
+    recoverChallenged(lost_now, r);
+  else
+    recoverTight(lost_now, r);
+}
+
+// challenge false: augmented MCL's recovery behind the guard above, or
+// lost_inject_fraction just after a loss.
+void Localizer::recoverTight(bool lost_now, StepResult& r) {
   const double fraction = lost_now ? std::max(p_.lost_inject_fraction, 0.0) : guardedFraction(r);
   const bool contradicted = !lost_now && disagree_updates_ >= std::max(1, p_.recovery_patience);
   r.injected = contradicted ? restartSearch() : inject(fraction);
@@ -450,13 +511,181 @@ void Localizer::recover(bool lost_now, StepResult& r) {
   }
 }
 
+// challenge true. Not converged (a global search, no estimate to keep):
+// augmented MCL as is, lost_inject_fraction just after a loss. Converged: no
+// random particle joins the cloud; an estimate is challenged when the map
+// contradicts it recovery_patience updates in a row, or when its likelihood
+// has been low that long and the map contradicts it now (never while it is
+// consistent, whatever the likelihood says).
+void Localizer::recoverChallenged(bool lost_now, StepResult& r) {
+  if (converged_) {
+    countContradictions(r);
+    const int patience = std::max(1, p_.recovery_patience);
+    if (challenger_.open)
+      judgeChallenge();
+    else if (disagree_updates_ >= patience || (low_updates_ >= patience && disagree_updates_ > 0))
+      r.injected = openChallenge();
+    return;
+  }
+  closeChallenge();
+  low_updates_ = disagree_updates_ = consistent_updates_ = 0;
+  const double augmented = std::min(p_.max_inject_fraction, std::max(0.0, 1 - r.likelihood_ratio));
+  r.injected = inject(lost_now ? std::max(p_.lost_inject_fraction, 0.0) : augmented);
+  if (r.injected > 0) {
+    ++injections_;
+    averages_set_ = false;  // as recoverTight
+  }
+}
+
+// Consecutive updates of a converged estimate that the map contradicts
+// (consistent_beams), whose likelihood is low (recovery_ratio), or neither.
+void Localizer::countContradictions(const StepResult& r) {
+  const bool disagrees = p_.consistent_beams > 0 && r.agreement < p_.consistent_beams;
+  const bool low = r.likelihood_ratio < p_.recovery_ratio;
+  low_updates_ = low ? low_updates_ + 1 : 0;
+  disagree_updates_ = disagrees ? disagree_updates_ + 1 : 0;
+  consistent_updates_ = disagrees || low ? 0 : consistent_updates_ + 1;
+}
+
+// A challenger: global_particles random poses over the free space, a global
+// search that runs beside the estimate (updateChallenger) until judged.
+size_t Localizer::openChallenge() {
+  challenger_ = Challenger{};
+  challenger_.open = true;
+  challenger_.t_open = last_t_;
+  const size_t n = globalCount();
+  challenger_.particles.resize(n);
+  double sx = 0, sy = 0, sxx = 0, syy = 0;
+  for (auto& part : challenger_.particles) {
+    part.d = randomFreePose();
+    part.log_w = 0;
+    sx += part.d.x;
+    sy += part.d.y;
+    sxx += part.d.x * part.d.x;
+    syy += part.d.y * part.d.y;
+  }
+  const double k = static_cast<double>(n);
+  challenger_.spread =
+      std::sqrt(std::max(0.0, sxx / k - mrpt::square(sx / k) + syy / k - mrpt::square(sy / k)));
+  ++challenges_;
+  ++injections_;
+  low_updates_ = disagree_updates_ = consistent_updates_ = 0;
+  return n;
+}
+
+// One update of the challenger with the odometry and scan the estimate was
+// just updated with, as the filter runs a global search: the global phase
+// (tempering, roughening, global_keep) and augmented MCL with its own
+// averages until its spread falls below converged_spread, then tracking.
+void Localizer::updateChallenger(double tracker_log_w_avg) {
+  const CPose2D mean = mean_;
+  const auto cov = cov_;
+  const double spread = spread_;
+  const bool converged = converged_, set = averages_set_;
+  const double slow = log_w_slow_, fast = log_w_fast_;
+  std::swap(mcl_.m_particles, challenger_.particles);
+  converged_ = challenger_.converged;
+  averages_set_ = challenger_.averages_set;
+  log_w_slow_ = challenger_.log_w_slow;
+  log_w_fast_ = challenger_.log_w_fast;
+  predict(odometryMotion(), effectiveSampleRatio() < p_.resample_ess);
+  weighParticles();
+  StepResult ignored;
+  const double log_evidence = updateWeights(ignored);
+  updateAverages(log_evidence);
+  refreshEstimate();
+  challenger_.mean = mean_;
+  challenger_.spread = spread_;
+  challenger_.converged =
+      spread_ < p_.converged_spread || (challenger_.converged && spread_ <= p_.lost_spread);
+  if (!challenger_.converged &&
+      inject(std::min(p_.max_inject_fraction,
+                      std::max(0.0, 1 - std::exp(log_w_fast_ - log_w_slow_)))) > 0)
+    averages_set_ = false;
+  challenger_.averages_set = averages_set_;
+  challenger_.log_w_slow = log_w_slow_;
+  challenger_.log_w_fast = log_w_fast_;
+  std::swap(mcl_.m_particles, challenger_.particles);
+  mean_ = mean;
+  cov_ = cov;
+  spread_ = spread;
+  converged_ = converged;
+  averages_set_ = set;
+  log_w_slow_ = slow;
+  log_w_fast_ = fast;
+  weighEvidence(log_evidence, tracker_log_w_avg);
+}
+
+// While the challenger is one place (spread at most lost_spread: not a search
+// over the map, whose best of many random poses may fit a scan the map
+// explains poorly better than the right pose does) more than lost_spread
+// from the estimate,
+// the log Bayes factor of each scan (the log of its mean observation
+// likelihood under the challenger minus under the estimate) is kept, the
+// latest recovery_patience of them.
+void Localizer::weighEvidence(double challenger_log_w_avg, double tracker_log_w_avg) {
+  const double apart =
+      std::hypot(challenger_.mean.x() - mean_.x(), challenger_.mean.y() - mean_.y());
+  if (challenger_.spread <= p_.lost_spread && apart > p_.lost_spread) {
+    ++challenger_.away;
+    challenger_.log_factors.push_back(challenger_log_w_avg - tracker_log_w_avg);
+    if (challenger_.log_factors.size() > static_cast<size_t>(std::max(1, p_.recovery_patience)))
+      challenger_.log_factors.pop_front();
+  } else {
+    challenger_.away = 0;
+    challenger_.log_factors.clear();
+  }
+}
+
+// One place away from the estimate for recovery_patience updates and the
+// scans of those updates likelier under the challenger (a Bayes factor above
+// 1): the estimate is lost and the challenger takes over. A converged one
+// that does not win then (a look-alike that explains less), or that
+// converged on the estimate, is dropped; so is one still searching once the
+// estimate has been consistent again for recovery_patience updates.
+void Localizer::judgeChallenge() {
+  const int patience = std::max(1, p_.recovery_patience);
+  double log_factor = 0;
+  for (double f : challenger_.log_factors) log_factor += f;
+  if (challenger_.away >= patience && log_factor > 0)
+    adoptChallenger();
+  else if (challenger_.converged && (challenger_.away == 0 || challenger_.away >= patience))
+    closeChallenge();
+  else if (!challenger_.converged && consistent_updates_ >= patience)
+    closeChallenge();
+}
+
+// The estimate was wrong: a loss now. The challenger's cloud is the filter
+// from here (once converged, an update reports the recovery).
+void Localizer::adoptChallenger() {
+  events_.push_back({LocalizationEvent::Kind::Loss, last_t_, spread_});
+  std::swap(mcl_.m_particles, challenger_.particles);
+  refreshEstimate();
+  converged_ = false;
+  ++challenges_won_;
+  // The challenger's averages go with it: the filter goes on as the global
+  // search it was.
+  averages_set_ = challenger_.averages_set;
+  log_w_slow_ = challenger_.log_w_slow;
+  log_w_fast_ = challenger_.log_w_fast;
+  closeChallenge();
+  low_updates_ = disagree_updates_ = consistent_updates_ = 0;
+}
+
+void Localizer::closeChallenge() { challenger_ = Challenger{}; }
+
 void Localizer::filterUpdate(const mrpt::obs::CObservation2DRangeScan& scan, double t,
                              StepResult& r) {
   const auto t0 = std::chrono::steady_clock::now();
   const MotionSampler motion = odometryMotion();
   const CPose2D expected = mean_ + pending_;
-  const bool resample = effectiveSampleRatio() < p_.resample_ess;
-  predict(motion, resample);
+  bool resample = false;
+  if (challenger_.open) {
+    resample = predictOwn(motion);
+  } else {
+    resample = effectiveSampleRatio() < p_.resample_ess;
+    predict(motion, resample);
+  }
   weighScan(scan);
   const double log_w_avg = updateWeights(r);
   r.resampled = resample;
@@ -465,6 +694,7 @@ void Localizer::filterUpdate(const mrpt::obs::CObservation2DRangeScan& scan, dou
   refreshEstimate();
   r.agreement = agreementOf(all_x_, all_y_, sensor_x_, sensor_y_, mean_);
   const double jump = std::hypot(mean_.x() - expected.x(), mean_.y() - expected.y());
+  if (challenger_.open) updateChallenger(log_w_avg);
   const double turned_rad = std::abs(pending_.phi());
   pending_ = CPose2D();
   first_update_done_ = true;
@@ -472,6 +702,8 @@ void Localizer::filterUpdate(const mrpt::obs::CObservation2DRangeScan& scan, dou
   const bool lost_now = updateConvergence(jump, t);
   rotate_.update(converged_, turned_rad, t, p_);
   recover(lost_now, r);
+  r.challenge = challenger_.open;
+  r.challenger_spread = challenger_.open ? challenger_.spread : 0;
   r.updated = true;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }

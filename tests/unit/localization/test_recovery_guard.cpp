@@ -11,6 +11,7 @@
 
 #include "interbot_laser.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -168,6 +169,82 @@ TEST(RecoveryGuard, ScanAgreementIsHighAtTheTruthAndLowElsewhere) {
   EXPECT_LT(loc.scanAgreement(*scan, CPose2D(3, 6.5, 0.3)), loc.params().consistent_beams);
   for (size_t i = 0; i < scan->getScanSize() / 2; ++i) scan->setScanRange(i, 0.6f);
   EXPECT_GT(loc.scanAgreement(*scan, CPose2D(2, 1.5, 0.3)), 0.95);
+}
+
+/** The apartment's grid with a wall that is not in the world: a band of
+ *  occupied cells across the living room (furniture mapped and since moved,
+ *  a person mapped as an obstacle, a doubled wall of a SLAM map). */
+mrpt::maps::COccupancyGridMap2D gridWithASpuriousWall() {
+  mrpt::maps::COccupancyGridMap2D g = apartment()->grid();
+  for (double x = 2; x <= 5; x += 0.5 * g.getResolution())
+    for (double y = 1.7; y <= 1.8; y += 0.5 * g.getResolution()) g.setPos(x, y, 0.0f);
+  return g;
+}
+
+/** The south walk of the living room and back, past the spurious wall: many
+ *  beams cross it at the right pose. Returns the largest position error. */
+double walkPastTheSpuriousWall(Localizer& loc) {
+  const auto path = walk({{1, 1}, {6, 1}, {6, 2.5}, {1, 2.5}, {1, 1}}, 0.05);
+  loc.initPose(path.front(), 0.05, 0.05, mrpt::DEG2RAD(2.0));
+  Replay replay(loc);
+  double worst = 0, lowest = 1;
+  for (size_t i = 1; i < path.size(); ++i) {
+    worst = std::max(worst, replay.step(path[i], path[i] - path[i - 1]));
+    lowest = std::min(lowest, replay.last().agreement);
+  }
+  EXPECT_LT(lowest, loc.params().consistent_beams);  // the map contradicts the right pose
+  return worst;
+}
+
+// The map contradicts a right estimate: it is challenged (a global search
+// runs beside it), but the search finds nothing that explains the scans
+// better, so no loss is declared, no random particle joins the cloud, and
+// the estimate stays right throughout.
+TEST(Challenge, AContradictedButRightEstimateIsNotLost) {
+  Localizer loc(gridWithASpuriousWall(), params());
+  const double worst = walkPastTheSpuriousWall(loc);
+  EXPECT_GE(loc.challenges(), 1u);
+  EXPECT_EQ(loc.challengesWon(), 0u);
+  EXPECT_TRUE(loc.events().empty());
+  EXPECT_EQ(loc.injections(), loc.challenges());  // only the challengers' random particles
+  EXPECT_LT(worst, 0.3);
+  EXPECT_TRUE(loc.converged());
+}
+
+// The same walk with challenge = false: the earlier guard replaces the
+// contradicted estimate by a global search and records a loss.
+TEST(Challenge, WithoutChallengeTheContradictedEstimateIsLost) {
+  LocalizationParams p = params();
+  p.challenge = false;
+  Localizer loc(gridWithASpuriousWall(), p);
+  walkPastTheSpuriousWall(loc);
+  EXPECT_EQ(loc.challenges(), 0u);
+  ASSERT_FALSE(loc.events().empty());
+  EXPECT_EQ(loc.events().front().kind, LocalizationEvent::Kind::Loss);
+}
+
+// A kidnap: the challenger's search explains the scans better than the
+// estimate, so it takes over (a loss, then a recovery on the truth).
+TEST(Challenge, AKidnappedRobotIsFoundByTheChallenger) {
+  Localizer loc(apartment()->grid(), params());
+  const auto a = walk({{1, 1}, {6, 1}, {6, 2.5}}, 0.05);
+  const auto b = walk({{4, 6.5}, {1, 6.5}, {1, 4.5}}, 0.05);
+  loc.initPose(a.front(), 0.05, 0.05, mrpt::DEG2RAD(2.0));
+  Replay replay(loc);
+  replay.follow(a);
+  ASSERT_TRUE(loc.events().empty());
+  replay.step(b.front(), CPose2D(0.05, 0, 0));
+  bool challenged = false;
+  for (size_t i = 1; i < b.size(); ++i) {
+    replay.step(b[i], b[i] - b[i - 1]);
+    challenged = challenged || replay.last().challenge;
+  }
+  EXPECT_TRUE(challenged);
+  EXPECT_GE(loc.challengesWon(), 1u);
+  ASSERT_GE(loc.events().size(), 2u);
+  EXPECT_EQ(loc.events().front().kind, LocalizationEvent::Kind::Loss);
+  const CPose2D end = loc.pose();
+  EXPECT_LT(std::hypot(end.x() - b.back().x(), end.y() - b.back().y()), 0.3);
 }
 
 // Converged, then 30 scans (1.5 m) with no return in range: no update is

@@ -69,23 +69,39 @@ struct LocalizationParams {
   /** An update is "low" when w_fast/w_slow falls below this; augmented MCL
    *  itself injects below 1. */
   double recovery_ratio = 0.5;
-  /** Consecutive low updates (or consecutive updates of a tight cloud that
-   *  disagrees with the map, see consistent_beams) before random particles
-   *  are injected. 1 with recovery_ratio 1 and consistent_beams 0: plain
+  /** Consecutive updates of a converged estimate that the map contradicts
+   *  (consistent_beams) or whose likelihood is low (recovery_ratio) before it
+   *  is challenged (see challenge); also the updates a converged challenger
+   *  must explain the scans better before it takes over. 1 with
+   *  recovery_ratio 1, consistent_beams 0 and challenge false: plain
    *  augmented MCL. */
   int recovery_patience = 3;
-  /** A tight cloud (spread below converged_spread) is consistent with the
-   *  map when at least this share of the scan's beams (all of them, not
-   *  decimated), cast from the estimate, do not pass through a mapped obstacle
-   *  (checked from lf_max_corr_dist after the sensor to lf_max_corr_dist
-   *  before the end point; a beam cut short by
+  /** A converged estimate is consistent with the map when at least this
+   *  share of the scan's beams (all of them, not decimated), cast from it, do
+   *  not pass through a mapped obstacle (checked from lf_max_corr_dist after
+   *  the sensor to lf_max_corr_dist before the end point; a beam cut short by
    *  something not on the map, a person, never contradicts the map: the
-   *  beam model's short readings, [Thrun05, Sec. 6.3]). Nothing is injected
-   *  while the cloud is tight and consistent; a tight cloud that disagrees for
-   *  recovery_patience updates in a row is lost (a kidnap that w_slow never
-   *  saw) and gives way to a global search (global_particles random
-   *  particles). 0: no consistency rule. */
+   *  beam model's short readings, [Thrun05, Sec. 6.3]). An estimate that is
+   *  not consistent for recovery_patience updates in a row is challenged (or,
+   *  with challenge false, lost: a global search replaces it). 0: no
+   *  consistency rule. */
   double consistent_beams = 0.7;
+  /** How a converged filter recovers (with recovery on). true: no random
+   *  particle ever joins a converged cloud; when the map contradicts its
+   *  estimate recovery_patience updates in a row (or its likelihood was low
+   *  that long and the map contradicts it now), a challenger (a global
+   *  search, global_particles random poses, the global phase's tempering and
+   *  roughening) runs beside it on the same scans. A loss is declared only
+   *  when the challenger is one place (spread at most lost_spread) more than
+   *  lost_spread away and explains the scans better (a larger mean
+   *  observation likelihood, summed over recovery_patience updates: a Bayes
+   *  factor) than the estimate; it then takes the estimate's place. A
+   *  challenger that converges on the estimate, or loses that comparison, is
+   *  dropped, as is one still searching once the estimate has been
+   *  consistent for recovery_patience updates. false: the earlier guard
+   *  (a tight cloud that disagrees is replaced by a global search; augmented
+   *  MCL injects into it after recovery_patience low updates). */
+  bool challenge = true;
   /** A scan with fewer returns in range than this (an open hall, a sensor
    *  blinded) is not weighed against the map: the estimate follows odometry
    *  alone until a scan with enough returns comes (0: weigh every scan). */

@@ -49,10 +49,14 @@ struct UpdateRecord {
   double beta = 1;         ///< power of the tempered likelihood
   bool resampled = false;  ///< a new set was drawn (KLD) at this update
   double agreement = 1;    ///< StepResult::agreement
+  /** m, StepResult::challenger_spread: the spread of the challenger running
+   *  after this update (0: none). */
+  double challenger_spread = 0;
 };
 
 struct LocalizeJobResult {
   size_t scans = 0, updates = 0, injections = 0;
+  size_t challenges = 0, challenges_won = 0;  ///< Localizer::challenges(), challengesWon()
   /** Scans that were due an update but held fewer than min_returns returns
    *  in range: the estimate followed odometry alone there. */
   size_t dead_reckoning_scans = 0;

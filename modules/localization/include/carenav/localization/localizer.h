@@ -15,9 +15,11 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -52,7 +54,11 @@ struct StepResult {
   /** An update was due but the scan held fewer than min_returns returns in
    *  range: it was not weighed, the estimate is odometry since the last update. */
   bool dead_reckoning = false;
-  double seconds = 0;  ///< CPU time of the filter update
+  /** A challenger (a global search beside the estimate, see
+   *  LocalizationParams::challenge) is running after the step. */
+  bool challenge = false;
+  double challenger_spread = 0;  ///< m, its spread (0 without one)
+  double seconds = 0;            ///< CPU time of the filter update
 };
 
 /** Monte Carlo localisation as MRPT's CMonteCarloLocalization2D runs it
@@ -60,17 +66,20 @@ struct StepResult {
  *  lmLikelihoodField_Thrun; the same random draws, so a seed gives the same
  *  particles), with the likelihood field tabled once for the whole map and the
  *  particles moved and drawn in 2D (the particle set itself and its mean and
- *  covariance stay MRPT's), plus augmented-MCL recovery: short- and long-term
- *  averages of the mean observation likelihood (w_fast, w_slow); after
- *  recovery_patience updates in a row with w_fast/w_slow < recovery_ratio, a
- *  share max(0, 1 - w_fast/w_slow) of the particles (at most
- *  max_inject_fraction) is replaced by random poses over the free cells,
- *  never while the cloud is tight and its estimate agrees with the scan
- *  (consistent_beams); a tight cloud that disagrees for recovery_patience
- *  updates is lost, and a global search replaces it. A new set is drawn (KLD) only when the
- * effective sample size ratio fell below resample_ess; until the filter has converged the scan
- * likelihood is tempered (temper_ess) and the sample size kept at global_keep of the global
- * start's. Not thread-safe; one instance per robot. */
+ *  covariance stay MRPT's), plus recovery. While not converged: augmented
+ *  MCL (short- and long-term averages of the mean observation likelihood,
+ *  w_fast and w_slow; a share max(0, 1 - w_fast/w_slow) of the particles, at
+ *  most max_inject_fraction, replaced by random poses over the free cells).
+ *  While converged (challenge on): no random particle joins the cloud; an
+ *  estimate the map contradicts (consistent_beams) for recovery_patience
+ *  updates is challenged by a global search run beside it, and lost only when
+ *  that search explains the scans better (a Bayes factor over
+ *  recovery_patience updates) from more than lost_spread away; it then
+ *  takes over. challenge off: the earlier guard (see LocalizationParams).
+ *  A new set is drawn (KLD) only when the effective sample size ratio fell
+ *  below resample_ess; until the filter has converged the scan likelihood is
+ *  tempered (temper_ess) and the sample size kept at global_keep of the
+ *  global start's. Not thread-safe; one instance per robot. */
 class Localizer {
  public:
   /** Copies the map. Throws InputError when it has no free cell. */
@@ -137,7 +146,13 @@ class Localizer {
   std::optional<double> convergenceTime() const { return convergence_time_; }
   const std::vector<LocalizationEvent>& events() const { return events_; }
   size_t updates() const { return updates_; }
+  /** Random particle sets added: augmented-MCL injections, global searches
+   *  after a loss and challengers. */
   size_t injections() const { return injections_; }
+  /** Challengers started, and those that took over (each a loss and a
+   *  recovery in events()). */
+  size_t challenges() const { return challenges_; }
+  size_t challengesWon() const { return challenges_won_; }
   const mrpt::maps::COccupancyGridMap2D& map() const { return *map_; }
   const LocalizationParams& params() const { return p_; }
 
@@ -152,13 +167,25 @@ class Localizer {
   // The steps of a filter update, in order.
   MotionSampler odometryMotion() const;
   void predict(const MotionSampler& motion, bool resample);
+  bool predictOwn(const MotionSampler& motion);
   void weighScan(const mrpt::obs::CObservation2DRangeScan& scan);
   double updateWeights(StepResult& r);
   void updateAverages(double log_w_avg);
   bool updateConvergence(double jump, double t);
   void recover(bool lost_now, StepResult& r);
+  void recoverTight(bool lost_now, StepResult& r);
   double guardedFraction(const StepResult& r);
   size_t restartSearch();
+  // The challenger (LocalizationParams::challenge).
+  void recoverChallenged(bool lost_now, StepResult& r);
+  void countContradictions(const StepResult& r);
+  size_t openChallenge();
+  void updateChallenger(double tracker_log_w_avg);
+  void weighEvidence(double challenger_log_w_avg, double tracker_log_w_avg);
+  void judgeChallenge();
+  void adoptChallenger();
+  void closeChallenge();
+  void weighParticles();
   double agreementOf(const std::vector<float>& xs, const std::vector<float>& ys, double sx,
                      double sy, const mrpt::poses::CPose2D& pose) const;
   bool crossesObstacle(double x0, double y0, double x1, double y1) const;
@@ -182,7 +209,26 @@ class Localizer {
   std::vector<LocalizationEvent> events_;
   size_t updates_ = 0, injections_ = 0;
   int low_updates_ = 0, disagree_updates_ = 0;  // recovery guard: consecutive updates
-  double sensor_x_ = 0, sensor_y_ = 0;          // scan origin in the robot frame
+  // The challenger: a global search beside a contradicted estimate.
+  struct Challenger {
+    bool open = false, converged = false;
+    mrpt::poses::CPosePDFParticles::CParticleList particles;
+    mrpt::poses::CPose2D mean;
+    double spread = 0;
+    double t_open = 0;  // time of the update that opened it
+    int away = 0;       // consecutive updates with its mean lost_spread away from the estimate
+    // log Bayes factors (its log mean likelihood minus the estimate's) of the
+    // latest of those updates, at most recovery_patience of them
+    std::deque<double> log_factors;
+    bool averages_set = false;  // its own augmented-MCL averages
+    double log_w_slow = 0, log_w_fast = 0;
+  } challenger_;
+  int consistent_updates_ = 0;  // consecutive updates the estimate was consistent
+  size_t challenges_ = 0, challenges_won_ = 0;
+  // The estimate's own generator while a challenger runs (predictOwn).
+  std::mt19937 own_rng_;
+  bool scan_planar_ = true;             // the latest scan is planar (else every particle gets -10)
+  double sensor_x_ = 0, sensor_y_ = 0;  // scan origin in the robot frame
   bool ever_converged_ = false;
   size_t global_n_ = 0;  // sample size of the last global start (0: none)
   RotateRequestTracker rotate_;
