@@ -33,6 +33,32 @@ inline fs::path testDir() {
   return d;
 }
 
+/** A room or a place of apartmentWith(): name and "x0,y0,x1,y1" or "x,y,deg". */
+struct Named {
+  std::string name, where;
+};
+
+/** The apartment world copied into `dir` with a places file beside it
+ *  (`carenav places add-room` / `add-place`); returns the world's YAML. */
+inline fs::path apartmentWith(const fs::path& dir, const std::vector<Named>& rooms,
+                              const std::vector<Named>& places = {}) {
+  using carenav_test::carenav;
+  using carenav_test::kSrc;
+  for (const char* f : {"apartment.yaml", "apartment.png"})
+    fs::copy_file(kSrc + "/maps/worlds/" + f, dir / f, fs::copy_options::overwrite_existing);
+  const std::string file = (dir / "apartment.places.yaml").string();
+  fs::remove(file);
+  for (const auto& r : rooms)
+    EXPECT_EQ(carenav({"-q", "places", "add-room", r.name, "--rect", r.where, "--file", file}).code,
+              0)
+        << r.name;
+  for (const auto& p : places)
+    EXPECT_EQ(
+        carenav({"-q", "places", "add-place", p.name, "--pose", p.where, "--file", file}).code, 0)
+        << p.name;
+  return dir / "apartment.yaml";
+}
+
 /** A node name of the test's own: private parameters stay on the shared
  *  master under the node's name after it ends. */
 inline std::string nodeName(const std::string& node) {

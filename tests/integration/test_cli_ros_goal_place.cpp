@@ -28,18 +28,7 @@ const std::string kInterbot = kSrc + "/ini/interbot.ini";
 /** The apartment world copied to `dir` with a places file beside it: the
  *  living room and its sofa at (3.5, 3.8, 90 deg). */
 fs::path apartmentWithPlaces(const fs::path& dir) {
-  for (const char* f : {"apartment.yaml", "apartment.png"})
-    fs::copy_file(kSrc + "/maps/worlds/" + f, dir / f, fs::copy_options::overwrite_existing);
-  const std::string places = (dir / "apartment.places.yaml").string();
-  fs::remove(places);
-  EXPECT_EQ(carenav({"-q", "places", "add-room", "Living room", "--rect", "0.2,0.2,4.6,7.5",
-                     "--file", places})
-                .code,
-            0);
-  EXPECT_EQ(
-      carenav({"-q", "places", "add-place", "Sofa", "--pose", "3.5,3.8,90", "--file", places}).code,
-      0);
-  return dir / "apartment.yaml";
+  return apartmentWith(dir, {{"Living room", "0.2,0.2,4.6,7.5"}}, {{"Sofa", "3.5,3.8,90"}});
 }
 
 bool anyStatus(const TopicLog<std_msgs::String>& log, const std::string& text) {

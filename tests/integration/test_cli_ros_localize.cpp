@@ -30,19 +30,7 @@ const std::string kInterbot = kSrc + "/ini/interbot.ini";
 /** The apartment world copied to `dir` with a places file beside it: the
  *  living room (x 0-7 m) as "Lounge" and the corridor as "Corridor". */
 fs::path apartmentWithRooms(const fs::path& dir) {
-  for (const char* f : {"apartment.yaml", "apartment.png"})
-    fs::copy_file(kSrc + "/maps/worlds/" + f, dir / f, fs::copy_options::overwrite_existing);
-  const std::string places = (dir / "apartment.places.yaml").string();
-  fs::remove(places);
-  EXPECT_EQ(
-      carenav({"-q", "places", "add-room", "Lounge", "--rect", "0.1,0.1,6.9,7.9", "--file", places})
-          .code,
-      0);
-  EXPECT_EQ(carenav({"-q", "places", "add-room", "Corridor", "--rect", "7.1,0.1,11.9,2.9", "--file",
-                     places})
-                .code,
-            0);
-  return dir / "apartment.yaml";
+  return apartmentWith(dir, {{"Lounge", "0.1,0.1,6.9,7.9"}, {"Corridor", "7.1,0.1,11.9,2.9"}});
 }
 
 double yawOf(const geometry_msgs::Quaternion& q) {
