@@ -28,6 +28,16 @@ void stopOnSignals() {
   std::signal(SIGTERM, onRosSignal);
 }
 
+/** What every node command does before running its node: the ROS arguments
+ *  CLI11 left over (remappings, _param:=value), the stop flag, Ctrl-C and
+ *  SIGTERM. */
+template <class Options>
+void prepareNode(Options& o, CLI::App* cmd) {
+  o.ros_args = cmd->remaining();
+  o.stop = &g_ros_stop;
+  stopOnSignals();
+}
+
 void addSim(CLI::App& ros, const GlobalOptions& g) {
   auto o = std::make_shared<ros::SimNodeOptions>();
   auto start = std::make_shared<std::string>();
@@ -53,10 +63,8 @@ void addSim(CLI::App& ros, const GlobalOptions& g) {
     if (!o->summary.empty()) prepareOutputFile(o->summary, "--summary");
     if (!o->record.empty()) prepareOutputFile(o->record, "--record");
     o->start = poseOption(*start, "--start");
-    o->ros_args = cmd->remaining();
-    o->stop = &g_ros_stop;
     o->quiet = g.quiet;
-    stopOnSignals();
+    prepareNode(*o, cmd);
     ros::runSimNode(*o);
   });
 }
@@ -90,10 +98,8 @@ void addNavigate(CLI::App& ros, const GlobalOptions& g) {
   cmd->callback([o, start, cmd, &g] {
     if (!o->out_dir.empty()) prepareOutputFolder(o->out_dir);
     o->start = poseOption(*start, "--start");
-    o->ros_args = cmd->remaining();
-    o->stop = &g_ros_stop;
     o->progress = !g.quiet;
-    stopOnSignals();
+    prepareNode(*o, cmd);
     const auto m = ros::runNavigateNode(*o);
     if (!g.quiet) std::cerr << "carenav ros navigate: " << m.outcome << "\n";
     std::cout << m.toJson() << std::flush;
@@ -124,10 +130,8 @@ void addLocalize(CLI::App& ros, const GlobalOptions& g) {
   cmd->allow_extras();
   cmd->callback([o, start, cmd, &g] {
     o->start = poseOption(*start, "--start");
-    o->ros_args = cmd->remaining();
-    o->stop = &g_ros_stop;
     o->quiet = g.quiet;
-    stopOnSignals();
+    prepareNode(*o, cmd);
     ros::runLocalizeNode(*o);
   });
 }
@@ -151,10 +155,8 @@ void addPerceive(CLI::App& ros, const GlobalOptions& g) {
   cmd->add_option("--duration", o->duration, "Seconds; 0: until stopped");
   cmd->allow_extras();
   cmd->callback([o, cmd, &g] {
-    o->ros_args = cmd->remaining();
-    o->stop = &g_ros_stop;
     o->quiet = g.quiet;
-    stopOnSignals();
+    prepareNode(*o, cmd);
     ros::runPerceiveNode(*o);
   });
 }
@@ -177,10 +179,8 @@ void addSlam(CLI::App& ros, const GlobalOptions& g) {
   cmd->allow_extras();
   cmd->callback([o, cmd, &g] {
     prepareOutputFolder(o->out_dir);
-    o->ros_args = cmd->remaining();
-    o->stop = &g_ros_stop;
     o->quiet = g.quiet;
-    stopOnSignals();
+    prepareNode(*o, cmd);
     ros::runSlamNode(*o);
   });
 }
