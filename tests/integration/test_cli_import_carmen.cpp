@@ -249,3 +249,35 @@ TEST(CliImportCarmen, NegativeTimestampsAreSkippedAndCounted) {
     }
   }
 }
+
+// Real logs whose scanner wrote its no-return beams as about 51 m (below
+// CARMEN's 80 m default): those readings become invalid beams and the summary
+// says so; logs whose no-return value is beyond 80 m report none.
+namespace {
+double jsonReal(const std::string& json, const std::string& key) {
+  std::smatch m;
+  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([0-9.eE+-]+)"))) {
+    ADD_FAILURE() << "no key " << key << " in " << json;
+    return 0;
+  }
+  return std::stod(m[1]);
+}
+}  // namespace
+
+TEST(CliImportCarmen, NoReturnValueOfRealLogs) {
+  for (const std::string name : {"acapulco", "edmonton", "intel", "csail"}) {
+    SCOPED_TRACE(name);
+    const std::string log = kTestData + "/carmen/" + name + "-corrected.log.gz";
+    const auto out = scratch() / (name + "-noret.rawlog");
+    const RunResult r =
+        carenav({"import", "carmen", log, "--out", out.string(), "--odometry", "none", "--json"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const bool piled = name == "acapulco" || name == "edmonton";
+    EXPECT_EQ(r.out.find("\"limit_m\"") != std::string::npos, piled) << r.out;
+    EXPECT_EQ(r.err.find("no-return value") != std::string::npos, piled) << r.err;
+    if (!piled) continue;
+    EXPECT_NEAR(jsonReal(r.out, "level_m"), 51.15, 0.01);
+    EXPECT_NEAR(jsonReal(r.out, "limit_m"), 49.61, 0.01);
+    EXPECT_GT(jsonNumber(r.out, "readings"), 3000);
+  }
+}

@@ -6,6 +6,7 @@
 #include <carenav/io/trajectory.h>
 
 #include "gz_input.h"
+#include "no_return_level.h"
 
 #include <mrpt/core/Clock.h>
 #include <mrpt/io/CFileGZOutputStream.h>
@@ -391,6 +392,51 @@ CarmenOdometry chooseOdometry(const std::string& path) {
   return odom ? CarmenOdometry::Odom : CarmenOdometry::Laser;
 }
 
+bool isOldLaser(std::string_view t) {
+  return t == "FLASER" || t == "RLASER" || hasDigitSuffix(t, "LASER");
+}
+
+/** Readings of one old laser line into its type's finder (malformed lines
+ *  are skipped: the conversion pass reports them at their line). */
+void addOldLaserReadings(const std::vector<std::string_view>& tok,
+                         std::map<std::string, NoReturnFinder>& finders) {
+  size_t n = 0;
+  if (tok.size() < 2 ||
+      std::from_chars(tok[1].data(), tok[1].data() + tok[1].size(), n).ec != std::errc() ||
+      n > tok.size() - 2)
+    return;
+  auto it = finders.try_emplace(std::string(tok[0]), kDefaultMaxRange).first;
+  for (size_t i = 0; i < n; ++i) {
+    double r = 0;
+    const std::string_view v = tok[2 + i];
+    if (std::from_chars(v.data(), v.data() + v.size(), r).ec == std::errc()) it->second.add(r);
+  }
+}
+
+/** First pass: the no-return value of each old laser message type whose
+ *  readings pile up at one (NoReturnFinder), for logs that state no maximum. */
+std::map<std::string, NoReturnLevel> findNoReturnLevels(const std::string& path) {
+  std::map<std::string, NoReturnFinder> finders;
+  try {
+    LineSource src(path);
+    std::string line;
+    std::vector<std::string_view> tok;
+    bool complete = true;
+    while (src.next(line, complete)) {
+      splitFields(line, tok);
+      if (!tok.empty() && isOldLaser(tok[0])) addOldLaserReadings(tok, finders);
+    }
+  } catch (const std::exception&) {
+    // The conversion pass reports what is wrong, at its line.
+  }
+  std::map<std::string, NoReturnLevel> levels;
+  for (const auto& [type, finder] : finders) {
+    NoReturnLevel l;
+    if (finder.find(l)) levels[type] = l;
+  }
+  return levels;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------
@@ -449,6 +495,10 @@ std::string CarmenImportStats::toText() const {
     o << "skipped:      " << n << " line(s) with a negative ipc_timestamp ("
       << joinCounts(negative_time) << ")\n";
   }
+  for (const auto& [k, l] : no_return)
+    o << "no return:    " << k << " readings >= " << fmtNumber(l.limit, 2) << " m (" << l.piled
+      << " piled at " << fmtNumber(l.level, 2) << " m"
+      << (l.param_max > 0 ? "; PARAM says " + fmtLimit(l.param_max) + " m" : "") << ")\n";
   o << "odometry:     " << odometry << " (source: " << toString(odometry_source);
   if (odometry_noise)
     o << "; noise seed " << odometry_noise->seed << ": "
@@ -480,6 +530,16 @@ std::string CarmenImportStats::toJson() const {
   j.key("empty_scans").value(empty_scans);
   j.key("bad_readings").value(bad_readings);
   j.key("scans_with_bad_readings").value(scans_with_bad_readings);
+  j.key("no_return").beginObject();
+  for (const auto& [k, l] : no_return) {
+    j.key(k).beginObject();
+    j.key("level_m").value(l.level);
+    j.key("limit_m").value(l.limit);
+    j.key("readings").value(l.piled);
+    if (l.param_max > 0) j.key("param_max_m").value(l.param_max);
+    j.endObject();
+  }
+  j.endObject();
   j.key("odometry").value(odometry);
   j.key("odometry_source").value(toString(odometry_source));
   if (odometry_noise) {
@@ -531,6 +591,16 @@ std::string CarmenImportStats::notesText() const {
          std::to_string(scans_with_bad_readings) +
          " scan(s) are nan, inf or negative (first at line " +
          std::to_string(first_bad_reading_line) + "): kept as invalid beams\n";
+  for (const auto& [k, l] : no_return)
+    s += "note: " + std::to_string(l.piled) + " " + k + " reading(s) pile up at " +
+         fmtNumber(l.level, 2) +
+         " m, the top of the log's ranges: the scanner's no-return value; readings >= " +
+         fmtNumber(l.limit, 2) + " m are invalid beams" +
+         (l.param_max > 0 ? ", not PARAM's " + fmtLimit(l.param_max) +
+                                " m (the range CARMEN's robot module used; the readings go "
+                                "beyond it)"
+                          : "") +
+         "; --max-range sets the limit\n";
   if (scans_time_backwards)
     s += "note: " + std::to_string(scans_time_backwards) +
          " scan(s) have a timestamp earlier than the scan before (kept in file order; the TUM "
@@ -599,8 +669,10 @@ struct RobotLaserTail {
 /** The conversion pass: the lines of the log into a temporary rawlog. */
 class CarmenConverter {
  public:
-  CarmenConverter(const CarmenImportOptions& opt, LineSource& src, CarmenImportStats& st)
-      : opt_(opt),
+  CarmenConverter(const CarmenImportOptions& opt, LineSource& src, CarmenImportStats& st,
+                  std::map<std::string, NoReturnLevel> no_return)
+      : no_return_(std::move(no_return)),
+        opt_(opt),
         src_(src),
         st_(st),
         tmp_(opt.output + ".tmp"),
@@ -654,8 +726,7 @@ class CarmenConverter {
     const Fields f(opt_.input, src_.lineNumber(), complete, tok);
     const std::string_view type = tok[0];
     if (type == "PARAM") return readParam(f);
-    if (type == "FLASER" || type == "RLASER" || hasDigitSuffix(type, "LASER"))
-      return readOldLaser(f);
+    if (isOldLaser(type)) return readOldLaser(f);
     const bool raw = hasDigitSuffix(type, "RAWLASER");
     const bool robot = hasDigitSuffix(type, "ROBOTLASER");
     if (raw || robot) return readNewLaser(f, robot);
@@ -711,18 +782,31 @@ class CarmenConverter {
     double t = 0;
     const auto stamp = stampOrSkip(f, t);
     if (!stamp) return;
-    buildScan(f, 2, n, oldLaserGeometry(n, front, rear), oldLaserMount(front, rear), *stamp);
+    buildScan(f, 2, n, oldLaserGeometry(type, n, front, rear), oldLaserMount(front, rear), *stamp);
     if (poses) readOldLaserPoses(f, 2 + n, front, *stamp, t);
     writeScan(n, t);
   }
 
-  ScanGeometry oldLaserGeometry(size_t n, bool front, bool rear) const {
+  /** The maximum range: the type's no-return limit when its readings show
+   *  one (used ones are reported in the stats), else PARAM's, else CARMEN's
+   *  default. The scanner's own no-return value wins over PARAM
+   *  robot_*_laser_max: that is a setting of CARMEN's robot module (the range
+   *  it used), which a log may state far below what its scanner measured. */
+  ScanGeometry oldLaserGeometry(std::string_view type, size_t n, bool front, bool rear) {
     ScanGeometry g;
     g.increment = oldLaserIncrement(n, front  ? par_.front_resolution
                                        : rear ? par_.rear_resolution
                                               : 0);
     const double pmax = front ? par_.front_max : rear ? par_.rear_max : 0;
-    if (pmax > 0) g.max_range = pmax;
+    const auto level = no_return_.find(std::string(type));
+    if (level != no_return_.end()) {
+      g.max_range = level->second.limit;
+      auto& used = st_.no_return[level->first];
+      used = level->second;
+      used.param_max = pmax;
+    } else if (pmax > 0) {
+      g.max_range = pmax;
+    }
     return g;
   }
 
@@ -933,6 +1017,7 @@ class CarmenConverter {
     emitted(t);
   }
 
+  const std::map<std::string, NoReturnLevel> no_return_;  // found by the first pass
   const CarmenImportOptions& opt_;
   LineSource& src_;
   CarmenImportStats& st_;
@@ -1001,7 +1086,9 @@ CarmenImportStats importCarmen(const CarmenImportOptions& opt) {
   const std::string tum_path = tumPathOf(opt);
   if (!tum_path.empty()) checkTumPath(opt, tum_path);
 
-  CarmenConverter conv(opt, src, st);
+  CarmenConverter conv(
+      opt, src, st,
+      opt.max_range > 0 ? std::map<std::string, NoReturnLevel>() : findNoReturnLevels(opt.input));
   const std::optional<BadLine> failure = conv.run();
   if (st.observations == 0) {
     conv.removeTemporary();

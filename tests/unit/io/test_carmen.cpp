@@ -701,3 +701,106 @@ TEST(Carmen, OdometryNoiseNeedsOdometry) {
   o.odometry_noise->dist_frac = -1;
   EXPECT_THROW(importCarmen(o), InputError);
 }
+
+namespace {
+/** 40 FLASER scans of 180 beams: 150 walls 1-9.9 m away and 30 beams of
+ *  `far(scan, beam)`. */
+template <class Far>
+std::string roomLog(const std::string& params, Far far) {
+  std::string log = params;
+  for (int s = 0; s < 40; ++s) {
+    std::ostringstream r;
+    for (int i = 0; i < 180; ++i)
+      r << (i ? " " : "") << (i < 150 ? 1 + 0.1 * ((i + s) % 90) : far(s, i));
+    log += flaser(r.str(), 180, "0 0 0", "0 0 0", std::to_string(10 + s) + ".5");
+  }
+  return log;
+}
+
+/** Beam validity of every scan of the rawlog, and the scans' maxRange. */
+std::vector<CObservation2DRangeScan::Ptr> scansOf(const CarmenImportStats& st) {
+  std::vector<CObservation2DRangeScan::Ptr> out;
+  for (const auto& o : readBack(st.output))
+    if (auto s = std::dynamic_pointer_cast<CObservation2DRangeScan>(o)) out.push_back(s);
+  return out;
+}
+}  // namespace
+
+TEST(Carmen, NoReturnValuePiledAtTheTopIsInvalid) {
+  // The far beams hit nothing: the scanner writes 51.15 m (a few 51.14).
+  const auto st = import(
+      writeText("noret.log", roomLog("", [](int s, int i) { return (s + i) % 7 ? 51.15 : 51.14; })),
+      "noret");
+  ASSERT_EQ(st.no_return.count("FLASER"), 1u);
+  const NoReturnLevel& l = st.no_return.at("FLASER");
+  EXPECT_NEAR(l.level, 51.14, 0.011);
+  EXPECT_NEAR(l.limit, 0.97 * l.level, 0.02);
+  EXPECT_EQ(l.piled, 40u * 30u);
+  const auto scans = scansOf(st);
+  ASSERT_EQ(scans.size(), 40u);
+  for (const auto& s : scans) {
+    EXPECT_NEAR(s->maxRange, l.limit, 1e-4);
+    EXPECT_TRUE(s->getScanRangeValidity(149));
+    for (int i = 150; i < 180; ++i) EXPECT_FALSE(s->getScanRangeValidity(i)) << i;
+  }
+  const std::string json = st.toJson();
+  EXPECT_NE(json.find("\"limit_m\""), std::string::npos) << json;
+  EXPECT_LT(json.find("\"no_return\""), json.find("\"limit_m\""));
+  EXPECT_NE(st.notesText().find("no-return value"), std::string::npos);
+}
+
+TEST(Carmen, RealFarReturnsAreNotANoReturnValue) {
+  // Far walls thinning out with range (20-51.2 m, one beam per 4 cm): the
+  // top of the readings is no pile, every reading below 80 m stays valid.
+  const auto st = import(
+      writeText("far.log",
+                roomLog("", [](int s, int i) { return 20 + 0.04 * ((s * 30 + i - 150) % 780); })),
+      "far");
+  EXPECT_TRUE(st.no_return.empty());
+  for (const auto& s : scansOf(st)) {
+    EXPECT_FLOAT_EQ(s->maxRange, 80.f);
+    for (int i = 0; i < 180; ++i) EXPECT_TRUE(s->getScanRangeValidity(i)) << i;
+  }
+  // A repeated value with many readings beyond it is a wall, not a pile.
+  const auto wall = import(
+      writeText("wall.log",
+                roomLog("", [](int s, int i) { return i < 160 ? 12.0 : 13 + 0.1 * (s + i); })),
+      "wall");
+  EXPECT_TRUE(wall.no_return.empty());
+  // A log of one value is no room at all: nothing is taken as no return.
+  const std::string flat = flaser(readings(180, 2), 180, "0 0 0", "0 0 0", "10.0");
+  EXPECT_TRUE(import(writeText("flat.log", flat + flat), "flat").no_return.empty());
+}
+
+TEST(Carmen, NoReturnValueWinsOverTheRobotModulesRange) {
+  // PARAM robot_front_laser_max is the range CARMEN's robot module used; a
+  // log may state 10 m while its scanner measured to 50 m (the walls here are
+  // up to 9.9 m, the no-return value 51.15 m).
+  auto far = [](int, int) { return 51.15; };
+  const std::string param = "PARAM robot_front_laser_max 5 1.0 h 1.0\n";
+  const auto p = import(writeText("noret_param.log", roomLog(param, far)), "noret_param");
+  ASSERT_EQ(p.no_return.count("FLASER"), 1u);
+  EXPECT_DOUBLE_EQ(p.no_return.at("FLASER").param_max, 5);
+  EXPECT_NE(p.notesText().find("not PARAM's 5 m"), std::string::npos) << p.notesText();
+  for (const auto& s : scansOf(p)) {
+    EXPECT_NEAR(s->maxRange, p.no_return.at("FLASER").limit, 1e-4);
+    EXPECT_TRUE(s->getScanRangeValidity(100));  // beyond PARAM's 5 m
+    EXPECT_FALSE(s->getScanRangeValidity(170));
+  }
+  // Without a pile PARAM stays the maximum range.
+  const auto wall = import(
+      writeText(
+          "wall_param.log",
+          roomLog(param, [](int s, int i) { return 20 + 0.04 * ((s * 30 + i - 150) % 780); })),
+      "wall_param");
+  EXPECT_TRUE(wall.no_return.empty());
+  for (const auto& s : scansOf(wall)) EXPECT_FLOAT_EQ(s->maxRange, 5.f);
+  // --max-range wins over both.
+  CarmenImportOptions o;
+  o.input = writeText("noret_opt.log", roomLog("", far));
+  o.output = (scratch() / "noret_opt.rawlog").string();
+  o.max_range = 70;
+  const auto m = importCarmen(o);
+  EXPECT_TRUE(m.no_return.empty());
+  for (const auto& s : scansOf(m)) EXPECT_TRUE(s->getScanRangeValidity(170));
+}

@@ -72,6 +72,17 @@ struct CarmenImportOptions {
   bool progress = false;
 };
 
+/** A scanner's no-return value found in a log's readings (old laser
+ *  messages state no maximum range), and the limit taken from it. */
+struct NoReturnLevel {
+  double level = 0;    ///< m, the repeated value at the top of the readings
+  double limit = 0;    ///< m, readings at or beyond it are invalid (no return)
+  uint64_t piled = 0;  ///< readings of the log at or beyond `limit`
+  /** m, PARAM robot_*_laser_max of the log when it states one (0: none):
+   *  the range CARMEN's robot module used, not the scanner's. */
+  double param_max = 0;
+};
+
 /** What `importCarmen` found and wrote. */
 struct CarmenImportStats {
   uint64_t lines = 0;                     ///< lines read, blank and comment lines included
@@ -82,11 +93,15 @@ struct CarmenImportStats {
   /** Readings that are nan, inf or negative (kept as invalid beams), the
    *  scans that have any, and the line of the first. */
   uint64_t bad_readings = 0, scans_with_bad_readings = 0, first_bad_reading_line = 0;
+  /** Old laser message types (FLASER, RLASER, LASERk) without a stated
+   *  maximum range whose readings pile up at a no-return value: readings at
+   *  or beyond its limit are written as invalid beams (see importCarmen). */
+  std::map<std::string, NoReturnLevel> no_return;
   uint64_t odometry = 0;                                  ///< CObservationOdometry written
   CarmenOdometry odometry_source = CarmenOdometry::None;  ///< the source used (never Auto)
   /** The noise added to the odometry (CarmenImportOptions::odometry_noise). */
   std::optional<OdometryNoiseParams> odometry_noise;
-  std::map<std::string, uint64_t> unknown;                ///< unknown message types, skipped
+  std::map<std::string, uint64_t> unknown;  ///< unknown message types, skipped
   /** Known messages left out by the chosen odometry source: ODOM lines when
    *  it is Laser or None. */
   std::map<std::string, uint64_t> unused;
@@ -140,7 +155,11 @@ std::string defaultTumPath(const std::string& rawlog_path);
  *  log has it, else span 180 deg. Sensor pose on the robot: FLASER at robot_frontlaser_offset
  * ahead, RLASER at robot_rearlaser_offset behind facing backwards, ROBOTLASERk laser_pose relative
  * to robot_pose, RAWLASERk and LASERk at the origin (their messages do not say). Readings <= 0 or
- * >= the maximum range are invalid.
+ * >= the maximum range are invalid. Old messages state no maximum range of the scanner: unless
+ * `max_range` gives one, a first pass over the log looks for the scanner's no-return value
+ * (readings piled up at the top of the log's ranges, NoReturnFinder); when found, readings
+ * within 3 % below it and beyond are invalid (stats.no_return), else PARAM robot_*_laser_max
+ * (the range CARMEN's robot module used), else 80 m.
  *
  *  Odometry: see CarmenOdometry; CObservationOdometry labelled "ODOMETRY",
  *  velocities set where the message has them (ODOM tv/rv, ROBOTLASERk
