@@ -7,6 +7,7 @@
 #include <carenav/places/places.h>
 #include <carenav/ros/nodes.h>
 #include <carenav/runtime/bridge.h>
+#include <carenav/runtime/live_run.h>
 #include <carenav/runtime/session.h>
 #include <carenav/sim/world.h>
 
@@ -328,16 +329,8 @@ navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o) {
   auto setup = startNode("carenav_navigate", o.profile, o.sets, o.plugin, o.ros_args);
   std::optional<mrpt::maps::COccupancyGridMap2D> grid;
   if (!o.map.empty() || !o.world.empty()) grid = loadMap(o);
-  setup.name = "ros";
-  setup.origin = !o.world.empty() ? o.world : o.map;
-  setup.map = grid ? &*grid : nullptr;
-  setup.localise = grid && o.start && !o.external_pose;
-  setup.start = o.start;
-  setup.control_rate = o.control_rate;
-  setup.out_dir = o.out_dir;
-  setup.progress = o.progress;
-  setup.progress_every = 2;
-  if (o.duration > 0) setup.duration = o.duration;
+  navigation::applyLiveRun(setup, o, "ros", !o.world.empty() ? o.world : o.map,
+                           grid ? &*grid : nullptr, grid && o.start && !o.external_pose);
   NavigationSession session(setup);
   if (!session.walker() && (!grid || !o.start))
     throw InputError("plugin " + setup.nav.plugin +
@@ -350,15 +343,7 @@ navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o) {
     throw InputError(setup.origin + ": no route from the start to the goal");
   NavigateNode node(o, session);
   const std::string why = node.run();
-  session.finishMetrics();
-  navigation::RunMetrics& m = session.metrics();
-  m.wall_seconds = m.duration_s = node.elapsed();
-  m.mean_speed_mps = m.duration_s > 0 ? m.path_length_m / m.duration_s : 0;
-  if (!std::isfinite(m.min_clearance_m)) m.min_clearance_m = 0;
-  if (const auto& g = session.goal()) {
-    const TPose2D mp = session.navigator().mapPose();
-    m.final_goal_error_m = std::hypot(mp.x - g->x, mp.y - g->y);
-  }
+  navigation::RunMetrics& m = navigation::finishLiveMetrics(session, node.elapsed());
   m.outcome = why;
   m.success = !session.goal() || node.reached();
   session.writeOutputs("carenav ros navigate");

@@ -6,6 +6,7 @@
 #include <carenav/places/places.h>
 #include <carenav/runtime/bridge.h>
 #include <carenav/runtime/line_socket.h>
+#include <carenav/runtime/live_run.h>
 #include <carenav/runtime/session.h>
 
 #include <chrono>
@@ -225,16 +226,8 @@ RunMetrics runBridge(const BridgeOptions& o) {
   const auto info = setup.profile.section<ProfileInfo>("profile");
   std::optional<mrpt::maps::COccupancyGridMap2D> grid;
   if (!o.map.empty()) grid = io::loadGridMap(o.map);
-  setup.name = "bridge";
-  setup.origin = o.map;
-  setup.map = grid ? &*grid : nullptr;
-  setup.localise = grid && o.start;  // from the first lidar2d
-  setup.start = o.start;
-  setup.control_rate = o.control_rate;
-  setup.out_dir = o.out_dir;
-  setup.progress = o.progress;
-  setup.progress_every = 2;
-  if (o.duration > 0) setup.duration = o.duration;
+  // Localised from the first lidar2d.
+  applyLiveRun(setup, o, "bridge", o.map, grid ? &*grid : nullptr, grid && o.start);
   NavigationSession session(setup);
   setBridgeGoal(o, session, setup.map);
   if (grid && o.start) {
@@ -248,15 +241,7 @@ RunMetrics runBridge(const BridgeOptions& o) {
                 setup.nav.plugin);
   BridgeLoop loop(o, session, sock);
   loop.run();
-  session.finishMetrics();
-  RunMetrics& m = session.metrics();
-  m.wall_seconds = m.duration_s = loop.elapsed();
-  m.mean_speed_mps = m.duration_s > 0 ? m.path_length_m / m.duration_s : 0;
-  if (!std::isfinite(m.min_clearance_m)) m.min_clearance_m = 0;
-  if (const auto& g = session.goal()) {
-    const TPose2D mp = session.navigator().mapPose();
-    m.final_goal_error_m = std::hypot(mp.x - g->x, mp.y - g->y);
-  }
+  RunMetrics& m = finishLiveMetrics(session, loop.elapsed());
   m.outcome = loop.error ? std::string(loop.error->what()) : loop.end_reason;
   m.success = !loop.error && (!session.goal() || loop.goal_reached);
   session.writeOutputs("carenav navigate --bridge " + o.address);

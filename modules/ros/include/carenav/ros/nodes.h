@@ -5,6 +5,7 @@
 // `__name:=n`) are passed in `ros_args`. This header includes no ROS header.
 #pragma once
 
+#include <carenav/runtime/live_run.h>
 #include <carenav/runtime/scenario.h>
 
 #include <atomic>
@@ -52,17 +53,14 @@ void runSimNode(const SimNodeOptions& o);
  *  (nav_msgs/Path) and `~status` (std_msgs/String). Stale scans or odometry
  *  (by their header stamps against the node's clock) stop the robot within
  *  one period (the safety supervisor). */
-struct NavigateNodeOptions {
-  std::string profile;
-  std::vector<std::string> sets;
-  std::string plugin;
-  std::string map;                           ///< static map (any map carenav reads) ...
-  std::string world;                         ///< ... or a simulator world's map
-  std::optional<navigation::TPose2D> start;  ///< where the robot is on the map
-  std::string goal;          ///< "x,y,deg" or a place of the map's places file; else from the topic
-  double control_rate = 10;  ///< Hz
-  double duration = 0;       ///< s; 0: until the goal is reached, or stopped
-  bool stay = false;         ///< after a goal, wait for the next one instead of ending
+/** With LiveRunOptions (profile, sets, plugin, start on the map,
+ *  control_rate, out_dir, stop, progress); `duration` 0: until the goal is
+ *  reached, or stopped. */
+struct NavigateNodeOptions : navigation::LiveRunOptions {
+  std::string map;    ///< static map (any map carenav reads) ...
+  std::string world;  ///< ... or a simulator world's map
+  std::string goal;   ///< "x,y,deg" or a place of the map's places file; else from the topic
+  bool stay = false;  ///< after a goal, wait for the next one instead of ending
   /** Run the control cycle as soon as a scan arrives (its command follows
    *  it at once), with the timer only as a fallback one period after the
    *  last cycle (so stale data still stops the robot). */
@@ -71,11 +69,8 @@ struct NavigateNodeOptions {
    *  localize`) instead of localising in the node; needs --map/--world and
    *  --start (until the first pose arrives). */
   bool external_pose = false;
-  std::string out_dir;  ///< run.png, navlog.csv, summary.json
   std::string odom_frame = "odom", map_frame = "map";
   std::vector<std::string> ros_args;
-  const std::atomic<bool>* stop = nullptr;
-  bool progress = false;
 };
 navigation::RunMetrics runNavigateNode(const NavigateNodeOptions& o);
 

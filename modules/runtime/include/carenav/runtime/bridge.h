@@ -26,6 +26,7 @@
 #include <carenav/common/robot.h>
 #include <carenav/navigation/local_planner.h>
 #include <carenav/runtime/intent.h>
+#include <carenav/runtime/live_run.h>
 #include <carenav/runtime/scenario.h>
 
 #include <mrpt/obs/CObservation.h>
@@ -74,28 +75,21 @@ std::vector<float> reduceRanges(const std::vector<float>& ranges, size_t n,
  *  segments are reduced (reduceRanges: each kept bin its nearest return). */
 mrpt::obs::CObservation::Ptr bridgeObservation(const BridgeMessage& scan, const SensorParams& s);
 
-struct BridgeOptions {
-  std::string address;            ///< HOST:PORT of the robot's bridge
-  std::string profile;            ///< robot profile
-  std::vector<std::string> sets;  ///< profile overrides
-  std::string plugin;             ///< local method (default: the profile's)
-  /** Goal navigation: the static map, the start pose on it and the goal
-   *  ("x,y,deg" or a place of MAP's places file). */
+/** With LiveRunOptions (profile, sets, plugin, start, control_rate, out_dir,
+ *  stop, progress); `duration` 0: until "bye", the source ends or `stop`. */
+struct BridgeOptions : LiveRunOptions {
+  std::string address;  ///< HOST:PORT of the robot's bridge
+  /** Goal navigation: the static map, the start pose on it (`start`) and
+   *  the goal ("x,y,deg" or a place of MAP's places file). */
   std::string map;
-  std::optional<TPose2D> start;
   std::string goal;
   /** The walker's user; without it, the bridge's "intent" lines. */
   std::shared_ptr<IntentSource> intent;
-  double control_rate = 10;  ///< Hz, real time
-  double duration = 0;       ///< s; 0: until "bye", the source ends or `stop`
   double connect_timeout = 10;
   /** s; a robot that sends no line for this long (connected, but silent)
    *  ends the run: `cmd T 0 0`, `stop error`, exit 2. Scans older than
    *  sensor_timeout already stop it before. */
   double silence_timeout = 5;
-  std::string out_dir;  ///< run.png, navlog.csv, summary.json; empty: none
-  const std::atomic<bool>* stop = nullptr;
-  bool progress = false;
 };
 
 /** Runs the navigation loop against the bridge in real time. Returns the
