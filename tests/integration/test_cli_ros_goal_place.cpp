@@ -4,6 +4,7 @@
 // and the robot does not move; a known one is driven to (sim + navigate on
 // a real ROS master, 0 collisions). Skipped without the ROS part.
 #include "cli_helpers.h"
+#include "ros_skip.h"
 
 #ifdef CARENAV_TEST_WITH_ROS
 #include <geometry_msgs/Twist.h>
@@ -37,10 +38,6 @@ bool anyStatus(const TopicLog<std_msgs::String>& log, const std::string& text) {
                      [&](const auto& m) { return m.data.find(text) != std::string::npos; });
 }
 
-#define SKIP_WITHOUT_ROS() \
-  if (!haveRosmaster()) GTEST_SKIP() << "no rosmaster (Debian package python3-rosmaster)"
-#else
-#define SKIP_WITHOUT_ROS() GTEST_SKIP() << "built without the ROS part (CARENAV_WITH_ROS=OFF)"
 #endif
 
 TEST(CliRosGoalPlace, UnknownPlaceWarnsKnownPlaceIsReached) {

@@ -5,6 +5,7 @@
 // unknown room, by option or by the `~in_room` parameter, is exit 2 naming
 // the room and the places file. Skipped without the ROS part.
 #include "cli_helpers.h"
+#include "ros_skip.h"
 
 #ifdef CARENAV_TEST_WITH_ROS
 #include <geometry_msgs/PoseArray.h>
@@ -48,10 +49,6 @@ void drive(::ros::Publisher& cmd, double v, double w, int tenths) {
   }
 }
 
-#define SKIP_WITHOUT_ROS() \
-  if (!haveRosmaster()) GTEST_SKIP() << "no rosmaster (Debian package python3-rosmaster)"
-#else
-#define SKIP_WITHOUT_ROS() GTEST_SKIP() << "built without the ROS part (CARENAV_WITH_ROS=OFF)"
 #endif
 
 TEST(CliRosLocalize, InRoomConvergesNearTheTruth) {

@@ -5,6 +5,7 @@
 // publish zero velocity within sensor_timeout + one control period (cmd_vel
 // as received by this test's own subscriber). Skipped without the ROS part.
 #include "cli_helpers.h"
+#include "ros_skip.h"
 
 #ifdef CARENAV_TEST_WITH_ROS
 #include <geometry_msgs/Twist.h>
@@ -33,10 +34,6 @@ pid_t startSim(const fs::path& dir, const std::string& start) {
                dir / "sim.log");
 }
 
-#define SKIP_WITHOUT_ROS() \
-  if (!haveRosmaster()) GTEST_SKIP() << "no rosmaster (Debian package python3-rosmaster)"
-#else
-#define SKIP_WITHOUT_ROS() GTEST_SKIP() << "built without the ROS part (CARENAV_WITH_ROS=OFF)"
 #endif
 
 TEST(CliRosNodes, SimAndNavigateReachTheGoalWithoutCollision) {

@@ -9,6 +9,7 @@
 // CameraInfo (the test's own: floor up to a wall 2 m ahead) gives a scan
 // ending at the wall.
 #include "cli_helpers.h"
+#include "ros_skip.h"
 
 #ifdef CARENAV_TEST_WITH_ROS
 #include <carenav/io/map_io.h>
@@ -118,10 +119,6 @@ float median(std::vector<float> v) {
   return v[v.size() / 2];
 }
 
-#define SKIP_WITHOUT_ROS() \
-  if (!haveRosmaster()) GTEST_SKIP() << "no rosmaster (Debian package python3-rosmaster)"
-#else
-#define SKIP_WITHOUT_ROS() GTEST_SKIP() << "built without the ROS part (CARENAV_WITH_ROS=OFF)"
 #endif
 
 TEST(CliRosPerceive, VirtualScanHasTheStairsDownAhead) {

@@ -4,6 +4,7 @@
 // running, and at SIGINT writes the outputs of `carenav slam`, which load.
 // Skipped without the ROS part.
 #include "cli_helpers.h"
+#include "ros_skip.h"
 
 #ifdef CARENAV_TEST_WITH_ROS
 #include <carenav/io/map_io.h>
@@ -65,10 +66,6 @@ void stopSimAndSlam(const fs::path& dir, std::pair<pid_t, pid_t> p) {
   EXPECT_EQ(waitExit(p.first), 0) << slurp(dir / "sim.log");
 }
 
-#define SKIP_WITHOUT_ROS() \
-  if (!haveRosmaster()) GTEST_SKIP() << "no rosmaster (Debian package python3-rosmaster)"
-#else
-#define SKIP_WITHOUT_ROS() GTEST_SKIP() << "built without the ROS part (CARENAV_WITH_ROS=OFF)"
 #endif
 
 TEST(CliRosSlam, MapsAShortDriveAndSaves) {
