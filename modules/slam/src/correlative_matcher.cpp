@@ -60,6 +60,30 @@ double CorrelativeMatcher::score(const std::vector<float>& xs, const std::vector
   return xs.empty() ? 0 : sum / xs.size();
 }
 
+void CorrelativeMatcher::windowSums(const std::vector<int>& gx, const std::vector<int>& gy, int nxy,
+                                    int step, std::vector<double>& sums) const {
+  // Point by point, each point's row segments of the table in order: the
+  // table is read along its rows instead of at random, and every pose's sum
+  // still adds its points' terms in the same order (the same result, bit
+  // for bit, as summing pose by pose).
+  const int n = 2 * nxy + 1;
+  std::fill(sums.begin(), sums.end(), 0.0);
+  for (size_t k = 0; k < gx.size(); ++k) {
+    // The offsets i whose cell gx[k] + (i - nxy) step lies inside [0, w).
+    const int first = gx[k] - nxy * step;  // the cell of i = 0
+    if (first > w_ - 1) continue;
+    const int i0 = first >= 0 ? 0 : (-first + step - 1) / step;
+    const int i1 = std::min(n, (w_ - 1 - first) / step + 1);
+    for (int j = 0; j < n; ++j) {
+      const int ty = gy[k] + (j - nxy) * step;
+      if (ty < 0 || ty >= h_) continue;
+      const float* row = &table_[static_cast<size_t>(ty) * w_];
+      double* out = &sums[static_cast<size_t>(j) * n];
+      for (int i = i0; i < i1; ++i) out[i] += row[first + i * step];
+    }
+  }
+}
+
 mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMap& scan,
                                                const mrpt::poses::CPose2D& prior,
                                                double* best_score, double widen_xy,
@@ -94,6 +118,7 @@ mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMa
   const bool integer_steps = step >= 1 && std::abs(cells_per_step - step) < 1e-6;
   std::vector<int> gx(cx.size()), gy(cx.size());
   std::vector<double> dist((2 * nxy + 1) * (2 * nxy + 1));  // m, from the prior
+  std::vector<double> sums(dist.size());
   for (int i = -nxy; i <= nxy; ++i)
     for (int j = -nxy; j <= nxy; ++j)
       dist[(i + nxy) * (2 * nxy + 1) + (j + nxy)] = std::hypot(i * p_.coarse_xy, j * p_.coarse_xy);
@@ -119,15 +144,10 @@ mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMa
     // the same for the whole yaw, the distance part for every yaw.
     const double yaw_penalty =
         weight_yaw * std::abs(std::remainder(yaw - prior.phi(), 2 * M_PI)) / (10 * deg);
+    windowSums(gx, gy, nxy, step, sums);
     for (int i = -nxy; i <= nxy; ++i)
       for (int j = -nxy; j <= nxy; ++j) {
-        const int ox = i * step, oy = j * step;
-        double sum = 0;
-        for (size_t k = 0; k < cx.size(); ++k) {
-          const int tx = gx[k] + ox, ty = gy[k] + oy;
-          if (tx < 0 || ty < 0 || tx >= w_ || ty >= h_) continue;
-          sum += table_[static_cast<size_t>(ty) * w_ + tx];
-        }
+        const double sum = sums[(j + nxy) * (2 * nxy + 1) + (i + nxy)];
         const double sc = (cx.empty() ? 0 : sum / cx.size()) -
                           weight_xy * dist[(i + nxy) * (2 * nxy + 1) + (j + nxy)] - yaw_penalty;
         if (sc > best) {

@@ -41,6 +41,11 @@ class CorrelativeMatcher {
 
  private:
   double lookup(double x, double y) const;
+  /** sums[(j + nxy) (2 nxy + 1) + (i + nxy)]: the table summed over the
+   *  cells (gx[k] + i step, gy[k] + j step) of every point k inside it, for
+   *  i, j in [-nxy, nxy]. */
+  void windowSums(const std::vector<int>& gx, const std::vector<int>& gy, int nxy, int step,
+                  std::vector<double>& sums) const;
   double score(const std::vector<float>& xs, const std::vector<float>& ys, double x, double y,
                double yaw) const;
 
