@@ -141,12 +141,7 @@ const ParamTable<SafetyParams>& SafetyParams::table() {
                             .real("intent_timeout", &P::intent_timeout, "s", 0.01, 10,
                                   "walker: stop when the user's command is older")
                             .real("intent_deadband", &P::intent_deadband, "", 0, 1,
-                                  "walker: user commands below this (m/s, rad/s) mean stop")
-                            .flag("unknown_ahead", &P::unknown_ahead,
-                                  "perception grid cells not seen free ahead of the robot "
-                                  "within its braking distance are not traversable")
-                            .real("command_latency", &P::command_latency, "s", 0, 2,
-                                  "time between a command and its effect (braking distance)");
+                                  "walker: user commands below this (m/s, rad/s) mean stop");
   return t;
 }
 
@@ -155,7 +150,7 @@ namespace {
 template <class T>
 std::vector<std::string> keysOf() {
   // Keys added after [navigation] was split never had an old name.
-  static const std::set<std::string> kNewer = {"static_memory", "unknown_ahead", "command_latency"};
+  static const std::set<std::string> kNewer = {"static_memory"};
   std::vector<std::string> keys;
   for (const auto& spec : T::table().specs())
     if (!kNewer.count(spec.key)) keys.push_back(spec.key);

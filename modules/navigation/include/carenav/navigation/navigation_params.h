@@ -117,11 +117,6 @@ struct SafetyParams {
   double odom_timeout = 0.5;      ///< s, stop when the newest odometry is older
   double intent_timeout = 0.5;    ///< s, walker: stop when the user's command is older
   double intent_deadband = 0.01;  ///< m/s and rad/s, user commands below count as "stop"
-  /** Perception grid cells not seen free (unknown: a shadow, outside the view)
-   *  ahead of the robot within its braking distance are not traversable
-   *  (the navigation session; docs/navigate.md, 'Unknown floor ahead'). */
-  bool unknown_ahead = true;
-  double command_latency = 0.05;  ///< s, between a command and its effect (braking distance)
   static const ParamTable<SafetyParams>& table();
 };
 

@@ -194,7 +194,7 @@ class NavigationSession {
   std::unique_ptr<perception::Pipeline> perceive_;
   std::string perception_sensor_;
   double perceive_ms_ = 0;
-  std::unique_ptr<UnknownAhead> unknown_;  ///< unknown floor ahead ([nav.safety] unknown_ahead)
+  std::unique_ptr<UnknownAhead> unknown_;  ///< unknown floor ahead (with a depth camera)
   double measured_v_ = 0;                  ///< m/s, the odometry's forward speed
   // the user
   std::optional<Twist> user_;
