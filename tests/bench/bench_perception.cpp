@@ -115,6 +115,14 @@ void runKos(benchmark::State& st, VsFrame fr) {
   st.counters["points"] = static_cast<double>(filtered.points.size());
 }
 }  // namespace
+// The whole rrt-gpd frame at the profiles' [sim] depth_decimation 4 (128 x 106 pixels).
+static void BM_Frame_RrtGpd_Decim4(benchmark::State& st) {
+  Pipeline pipe(PerceptionParams{}, Method::RrtGpd);
+  FrameInput in;
+  in.cloud = &vsFrame(VsFrame::StairDecim4);
+  in.sensor_origin = {0.2f, 0.f, 0.9f};
+  for (auto _ : st) benchmark::DoNotOptimize(pipe.process(in, false));
+}
 static void BM_FspfPlusBaseline(benchmark::State& s) { runFspf<true>(s, VsFrame::Stair); }
 static void BM_KosBaseline(benchmark::State& s) { runKos<true>(s, VsFrame::Stair); }
 static void BM_FspfPlus_Decim4(benchmark::State& s) { runFspf<false>(s, VsFrame::StairDecim4); }
@@ -135,6 +143,7 @@ BENCHMARK(BM_Frame_RrtGpd)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Frame_Ransac)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Frame_HeightBand)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Frame_RrtGpdNoiseModel)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Frame_RrtGpd_Decim4)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Frame_RrtGpdWithScans)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ElevationGrid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GroundPlane_RrtGpd)->Unit(benchmark::kMillisecond);

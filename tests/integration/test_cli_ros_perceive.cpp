@@ -249,8 +249,8 @@ TEST(CliRosPerceive, SimDepthBagPerceivesAsItsCloudBag) {
   EXPECT_EQ(from_clouds.size(), images) << "as many clouds as images";
   ASSERT_FALSE(from_bag.empty());
   // The obstacles of the clouds' last local grid are obstacles of the depth
-  // images' too; the images find more (drop edges from the image columns:
-  // a bag's cloud reaches perception without its organisation).
+  // images' too (an organised cloud keeps its image layout, so the drop
+  // edges from the image columns run on both: 724 cells each).
   char last[32];
   std::snprintf(last, sizeof(last), "frame_%04u.gridmap.gz", static_cast<unsigned>(images - 1));
   const auto from_depth = obstacleCells(dir / "depth_bag" / last);

@@ -7,6 +7,7 @@
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CObservationVelodyneScan.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -32,6 +33,37 @@ struct Rigid {
             r[6] * a.x + r[7] * a.y + r[8] * a.z + t[2]};
   }
 };
+/** The image layout of a point list whose points carry their pixel
+ *  (points3D_idxs_x / _y: column, row), e.g. an organised ROS PointCloud2
+ *  without its invalid points (modules/ros cloudFromRos): width x height
+ *  with NaN where no point is, so the rules that follow image columns (drop
+ *  edges, FSPF+) run on it. False, and `out` untouched, when the pixels are
+ *  missing, one row only, any pixel twice, or the image larger than
+ *  kMaxCloudPoints: then the list stays a list. */
+bool organisedFromPixels(const mrpt::obs::CObservation3DRangeScan& o, Cloud& out) {
+  const size_t n = o.points3D_x.size();
+  if (n == 0 || o.points3D_y.size() != n || o.points3D_z.size() != n ||
+      o.points3D_idxs_x.size() != n || o.points3D_idxs_y.size() != n)
+    return false;
+  size_t w = 0, h = 0;
+  for (size_t i = 0; i < n; ++i) {
+    w = std::max<size_t>(w, o.points3D_idxs_x[i] + size_t{1});
+    h = std::max<size_t>(h, o.points3D_idxs_y[i] + size_t{1});
+  }
+  if (h < 2 || w * h > kMaxCloudPoints) return false;
+  std::vector<Point3f> pts(w * h, Point3f{kNaN, kNaN, kNaN});
+  std::vector<char> used(w * h, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const size_t k = size_t{o.points3D_idxs_y[i]} * w + o.points3D_idxs_x[i];
+    if (used[k]++) return false;
+    pts[k] = {o.points3D_x[i], o.points3D_y[i], o.points3D_z[i]};
+  }
+  out.width = w;
+  out.height = h;
+  out.points = std::move(pts);
+  return true;
+}
+
 }  // namespace
 
 mrpt::poses::CPose3D parseSensorPose(const std::string& text) {
@@ -97,9 +129,11 @@ std::optional<Cloud> cloudFromObservation(
           p = {static_cast<float>(x), static_cast<float>(ky * x), static_cast<float>(kz * x)};
         }
     } else if (o->hasPoints3D) {
-      for (size_t i = 0; i < o->points3D_x.size(); ++i)
-        local.points.push_back({o->points3D_x[i], o->points3D_y[i], o->points3D_z[i]});
-      local.width = local.points.size();
+      if (!organisedFromPixels(*o, local)) {
+        for (size_t i = 0; i < o->points3D_x.size(); ++i)
+          local.points.push_back({o->points3D_x[i], o->points3D_y[i], o->points3D_z[i]});
+        local.width = local.points.size();
+      }
     } else {
       local.width = 0;  // no data: an empty frame
     }

@@ -25,12 +25,16 @@ struct ColumnScan {
   LocalOccupancy& grid;
   double so;  // sensor height over the plane
   size_t edges = 0;
+  // Loop invariants in registers (the per-pixel step reads nothing else).
+  double pa = plane.a, pb = plane.b, pc = plane.c, pd = plane.d;
+  double ox = o.x, oy = o.y, oz = o.z;
+  double dpth2 = p.d_pth * p.d_pth;
+  double kv = p.noise_k * p.depth_noise_std, kv2 = kv * kv;
 
   /** Squared rule-1 threshold at q: max(d_pth, noise_k sigma_v)^2 (no sqrt). */
   double thr2(const Point3f& q) const {
-    const double dx = q.x - o.x, dy = q.y - o.y, dz = q.z - o.z;
-    const double kv = p.noise_k * p.depth_noise_std;
-    return std::max(p.d_pth * p.d_pth, kv * kv * (dx * dx + dy * dy + dz * dz) * dz * dz);
+    const double dx = q.x - ox, dy = q.y - oy, dz = q.z - oz;
+    return std::max(dpth2, kv2 * (dx * dx + dy * dy + dz * dz) * dz * dz);
   }
   /** Depression of the ray o -> q below the plane, rad. */
   double depression(const Point3f& q) const {
@@ -65,7 +69,7 @@ struct ColumnScan {
     }
     ++edges;
   }
-  void step(Column& k, size_t u, int v);
+  void step(Column& k, const Point3f& q, size_t u, int v);
   void finish(Column& k, size_t u);
   const Point3f& at(int v, size_t u) const {
     return c.points[static_cast<size_t>(v) * c.width + u];
@@ -88,14 +92,14 @@ void ColumnScan::finish(Column& k, size_t u) {
     mark(at(k.f_row, u));
 }
 
-void ColumnScan::step(Column& k, size_t u, int v) {
-  const Point3f& q = at(v, u);
+void ColumnScan::step(Column& k, const Point3f& q, size_t u, int v) {
   if (!validPoint(q)) {
     k.gap += k.f_row >= 0;
     return;
   }
-  const double sd = plane.signedDistance(q.x, q.y, q.z) - k.level, sd2 = sd * sd;
-  if (sd2 <= p.d_pth * p.d_pth || sd2 <= thr2(q)) {
+  // Plane::signedDistance, with the coefficients held here.
+  const double sd = pa * q.x + pb * q.y + pc * q.z + pd - k.level, sd2 = sd * sd;
+  if (sd2 <= dpth2 || sd2 <= thr2(q)) {
     finish(k, u);
     k.prev_row = k.f_row;
     k.f_row = v;
@@ -122,9 +126,13 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
   // randomised benchmark through.
   thread_local std::vector<Column> cols;
   cols.assign(c.width, Column{});
-  for (size_t v = c.height; v-- > 0;)
-    for (size_t u = 0; u < c.width; ++u) s.step(cols[u], u, static_cast<int>(v));
-  for (size_t u = 0; u < c.width; ++u) s.finish(cols[u], u);
+  Column* col = cols.data();
+  const size_t w = c.width;
+  for (size_t v = c.height; v-- > 0;) {
+    const Point3f* row = c.points.data() + v * w;
+    for (size_t u = 0; u < w; ++u) s.step(col[u], row[u], u, static_cast<int>(v));
+  }
+  for (size_t u = 0; u < w; ++u) s.finish(col[u], u);
   return s.edges;
 }
 

@@ -4,6 +4,7 @@
 #include <carenav/navigation/mrpt_ptg.h>
 #include <carenav/perception/pipeline.h>
 #include <carenav/runtime/session.h>
+#include <carenav/sim/sim_params.h>
 
 #include <unistd.h>
 #include <chrono>
@@ -27,6 +28,27 @@ SessionSetup sessionSetup(const std::string& profile_path, const std::vector<std
   return s;
 }
 
+namespace {
+
+/** Unknown floor ahead from the profile: the reaction time is the command
+ *  latency ([sim] latency: the time between a command and its effect, what
+ *  the simulator gives the robot), one control cycle and one frame of the
+ *  camera; the margin the robot's safe_distance; "seen free" the perception
+ *  grid's free threshold. */
+std::unique_ptr<UnknownAhead> makeUnknownAhead(const SessionSetup& s,
+                                               const perception::PerceptionParams& percp,
+                                               const SensorParams& camera) {
+  UnknownAheadParams p;
+  p.command_latency = s.profile.section<sim::SimParams>("sim").latency;
+  p.control_period = s.control_rate > 0 ? 1.0 / s.control_rate : 0.1;
+  p.frame_period = camera.rate_hz > 0 ? 1.0 / camera.rate_hz : 0.1;
+  p.margin = s.robot.safe_distance;
+  p.seen_free_below = percp.free_threshold;
+  return std::make_unique<UnknownAhead>(s.robot, p, percp.resolution);
+}
+
+}  // namespace
+
 NavigationSession::NavigationSession(SessionSetup setup)
     : s_(std::move(setup)),
       nav_(s_.nav, s_.robot),
@@ -43,6 +65,7 @@ NavigationSession::NavigationSession(SessionSetup setup)
     if (sp.type == "depth-camera") {
       perceive_ = std::make_unique<perception::Pipeline>(percp, perception::Method::RrtGpd);
       perception_sensor_ = percp.sensor;
+      unknown_ = makeUnknownAhead(s_, percp, sp);
       break;
     }
   if (s_.localise && s_.map && s_.start && !loc_sensor_.empty()) {

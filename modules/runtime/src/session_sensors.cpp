@@ -25,6 +25,8 @@ constexpr double perception_occupied = 0.6;
 void NavigationSession::odometry(const TPose2D& odo, const Twist& measured, double t) {
   odom_ = odo;
   have_odom_ = true;
+  measured_v_ = measured.v;
+  if (unknown_) unknown_->stoodOn(odo);
   nav_.setOdometry(odo, measured, t);
 }
 
@@ -75,6 +77,12 @@ void NavigationSession::depthFrame(const mrpt::obs::CObservation& obs, const TPo
   for (int j = 0; j < g.cells(); ++j)
     for (int i = 0; i < g.cells(); ++i)
       if (g.prob(i, j) > perception_occupied) occ.push_back({g.centreX(i), g.centreY(j)});
+  // Floor no frame has seen ahead within the braking distance: not traversable.
+  if (unknown_) {
+    unknown_->stoodOn(odo);
+    const auto ua = unknown_->cells(g, odo, measured_v_);
+    occ.insert(occ.end(), ua.begin(), ua.end());
+  }
   nav_.setPerceivedObstacles(std::move(occ), t);
   // The frame's own floor and obstacle voxels: people walking in.
   // (Not the grid's ray-cleared cells: rays pass over a box's top.)

@@ -93,6 +93,51 @@ TEST(RosMsgConvert, CloudDropsNonFinitePoints) {
   EXPECT_FALSE(cloudFromRos(m, "cam", {})) << "no z field";
 }
 
+/** An xyz PointCloud2 of w x h points (row-major), NaN at pixel `hole`. */
+sensor_msgs::PointCloud2 xyzCloud(uint32_t w, uint32_t h, size_t hole) {
+  sensor_msgs::PointCloud2 m;
+  m.width = w;
+  m.height = h;
+  m.point_step = 12;
+  for (int i = 0; i < 3; ++i) {
+    sensor_msgs::PointField f;
+    f.name = std::string(1, "xyz"[i]);
+    f.offset = 4 * i;
+    f.datatype = sensor_msgs::PointField::FLOAT32;
+    f.count = 1;
+    m.fields.push_back(f);
+  }
+  m.data.resize(size_t{w} * h * 12);
+  for (size_t k = 0; k < size_t{w} * h; ++k) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float v[3] = {k == hole ? nan : 1.f + k, 0.1f * (k % w), -0.1f * (k / w)};
+    std::memcpy(&m.data[k * 12], v, 12);
+  }
+  return m;
+}
+
+TEST(RosMsgConvert, AnOrganisedCloudKeepsItsImageLayoutForPerception) {
+  // 4 x 3 pixels, pixel 5 (row 1, column 1) invalid: the perception cloud is
+  // 4 x 3 again with NaN there, so the rules along image columns run on it.
+  const auto o = cloudFromRos(xyzCloud(4, 3, 5), "cam", {});
+  ASSERT_TRUE(o);
+  const auto c = carenav::perception::cloudFromObservation(*o);
+  ASSERT_TRUE(c);
+  EXPECT_TRUE(c->organised());
+  EXPECT_EQ(c->width, 4u);
+  EXPECT_EQ(c->height, 3u);
+  ASSERT_EQ(c->points.size(), 12u);
+  EXPECT_FALSE(carenav::perception::validPoint(c->points[5]));
+  EXPECT_FLOAT_EQ(c->points[6].x, 7.f) << "pixel 6 where it was";
+  EXPECT_FLOAT_EQ(c->points[11].x, 12.f);
+  // One row (an unorganised cloud): a list of its valid points, as before.
+  const auto l =
+      carenav::perception::cloudFromObservation(*cloudFromRos(xyzCloud(6, 1, 2), "cam", {}));
+  ASSERT_TRUE(l);
+  EXPECT_FALSE(l->organised());
+  EXPECT_EQ(l->points.size(), 5u);
+}
+
 }  // namespace
 
 // A simulated depth frame as a 16UC1 Image + CameraInfo and back: the same

@@ -15,6 +15,7 @@
 #include <carenav/navigation/navigator.h>
 #include <carenav/runtime/intent.h>
 #include <carenav/runtime/scenario.h>
+#include <carenav/runtime/unknown_ahead.h>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/obs/CObservation.h>
@@ -193,6 +194,8 @@ class NavigationSession {
   std::unique_ptr<perception::Pipeline> perceive_;
   std::string perception_sensor_;
   double perceive_ms_ = 0;
+  std::unique_ptr<UnknownAhead> unknown_;  ///< unknown floor ahead (with a depth camera)
+  double measured_v_ = 0;                  ///< m/s, the odometry's forward speed
   // the user
   std::optional<Twist> user_;
   // metrics and outputs
