@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace carenav::navigation {
 
@@ -78,20 +79,31 @@ class GoalDwa final : public LocalPlanner {
     auto evaluate = [&](const std::vector<Twist>& candidates) {
       double best = std::numeric_limits<double>::infinity();
       for (const Twist& s : candidates) {
-        Trajectory tr =
-            rollout(*in.map, in.pose, s, d_.sim_time, d_.sim_step, cap, d_.obstacle_distance_cap);
+        // With the robot's dynamics (in.motion): the motion it will make
+        // when s is sent now, and the supervisor's own stop test of it.
+        std::optional<CommandMotion> motion;
+        if (in.motion) motion.emplace(in.pose, *in.motion, s, r_);
+        Trajectory tr = motion ? rollout(*in.map, *motion, s, d_.sim_time, d_.sim_step, cap,
+                                         d_.obstacle_distance_cap)
+                               : rollout(*in.map, in.pose, s, d_.sim_time, d_.sim_step, cap,
+                                         d_.obstacle_distance_cap);
         ++out.evaluated;
         // Admissible: brakes before the first contact, and the supervisor
         // (same footprint, braking model and safe distance) passes it unchanged.
-        if (!tr.leaves_map &&
-            canBrake(s, tr.time_to_collision, r_, r_.safe_distance,
-                     in.map->footprint().circumscribed) &&
-            brakingScale(*in.map, in.pose, s, r_, d_.sim_step) >= 1.0) {
+        // (from the robot's state: no contact before a stop sent next cycle
+        // could act, then the supervisor's own stop test)
+        const bool brakes = motion ? tr.time_to_collision > in.motion->latency + in.motion->period
+                                   : canBrake(s, tr.time_to_collision, r_, r_.safe_distance,
+                                              in.map->footprint().circumscribed);
+        const MotionState* ms = in.motion ? &*in.motion : nullptr;
+        if (!tr.leaves_map && brakes &&
+            brakingScale(*in.map, in.pose, s, r_, d_.sim_step, r_.safe_distance, ms) >= 1.0) {
           ++out.admissible;
           const double ts = std::min(g_.score_time, d_.sim_time);
-          const TPose2D e = integrateArc(in.pose, s.v, s.w, ts);
+          const TPose2D e = motion ? motion->pose(ts) : integrateArc(in.pose, s.v, s.w, ts);
+          const double turned = motion ? motion->turned(ts) : s.w * ts;
           // The heading error after ts, unwrapped: the turn still needed
-          // (from the start heading, within +-pi) less the turn made, w ts,
+          // (from the start heading, within +-pi) less the turn made,
           // which may exceed pi at a fast robot's turn rate. Wrapping it
           // would make a spin past the target look as good as stopping on it.
           double needed;
@@ -101,7 +113,7 @@ class GoalDwa final : public LocalPlanner {
             const TPoint2D t = lookaheadPoint(path, e.x, e.y, g_.lookahead, corner_);
             needed = angleDiff(std::atan2(t.y - e.y, t.x - e.x), in.pose.phi);
           }
-          const double heading_err = std::abs(needed - s.w * ts);
+          const double heading_err = std::abs(needed - turned);
           const double path_dist = distanceToPath(path, e.x, e.y);
           const double speed = r_.v_max > 0 ? (r_.v_max - s.v) / r_.v_max : 0;
           tr.cost = g_.k_heading * heading_err + g_.k_path * path_dist + g_.k_speed * speed +

@@ -114,7 +114,9 @@ bool Recovery::reverseAdmissible(const LocalCostmap& map, const TPose2D& pose,
   if (cmd.v == 0 || cmd.v < r_.v_min - 1e-9 || cmd.v > r_.v_max + 1e-9 || path_.size() < 2)
     return false;
   // The supervisor's rule, unchanged: the command passes without slowing.
-  if (brakingScale(map, pose, cmd, r_, nav_.sim_step, p_.backup_margin) < 1.0) return false;
+  if (brakingScale(map, pose, cmd, r_, nav_.sim_step, p_.backup_margin,
+                   motion_ ? &*motion_ : nullptr) < 1.0)
+    return false;
   // ... and the poses it sweeps until it could stop (one cycle, braking and
   // the safe distance) stay on the way the robot came.
   const double u = std::abs(cmd.v);
@@ -184,8 +186,8 @@ std::optional<Twist> Recovery::spinCommand(const PlannerInput& in) const {
     if (spin_dir_ != 0 && dir != spin_dir_) break;  // a turn keeps its direction
     const Twist cmd{0, dir * w};
     const Trajectory tr = rollout(*in.map, in.pose, cmd, angle / w, nav_.sim_step / 2, 0.0);
-    if (tr.admissible() &&
-        brakingScale(*in.map, in.pose, cmd, r_, nav_.sim_step, p_.backup_margin) >= 1.0)
+    if (tr.admissible() && brakingScale(*in.map, in.pose, cmd, r_, nav_.sim_step, p_.backup_margin,
+                                        motion_ ? &*motion_ : nullptr) >= 1.0)
       return cmd;
   }
   return std::nullopt;
@@ -248,6 +250,7 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
                                             const PlannerOutput& plan, bool blocked,
                                             double route_left) {
   if (!p_.enabled) return std::nullopt;
+  motion_ = in.motion;
   if (phase_ == Phase::GaveUp) {
     PlannerOutput o;
     o.note = "gave up: " + reason_;

@@ -104,6 +104,9 @@ class Recovery {
   TPose2D phase_pose_;
   double backed_ = 0, spun_ = 0, spin_dir_ = 0;
   TPose2D last_pose_;
+  // the robot's dynamics of the cycle under way (PlannerInput::motion): the
+  // supervisor judges a recovery's command from it, so the recovery does too
+  std::optional<MotionState> motion_;
 };
 
 }  // namespace carenav::navigation
