@@ -202,13 +202,17 @@ PlannerOutput Recovery::command(const Twist& cmd, const std::string& note) const
   return o;
 }
 
-void Recovery::routeChanged(double now) {
-  have_best_ = false;
-  best_t_ = now;
+void Recovery::routeChanged(double) {
+  // Progress is measured on the new route from the next cycle, but the time
+  // since the last progress keeps running: a route replanned every few
+  // seconds around a robot that goes nowhere must not hide that it does.
+  rebase_ = true;
 }
 
 void Recovery::newGoal(double now) {
-  routeChanged(now);
+  have_best_ = false;
+  rebase_ = false;
+  best_t_ = now;
   phase_ = Phase::Idle;
   reason_.clear();
   attempts_ = 0;
@@ -257,6 +261,12 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
     return o;
   }
   // Progress along the route (near the goal: turning to its heading is progress).
+  if (rebase_ && have_best_) {
+    // the new route's length, less what was gained since the best on the old one
+    best_left_ = route_left + std::max(0.0, best_left_ - last_left_);
+  }
+  rebase_ = false;
+  last_left_ = route_left;
   if (!have_best_ || route_left < best_left_ - p_.progress_distance ||
       route_left < nav_.goal_tolerance) {
     if (have_best_ && route_left < best_left_ - p_.progress_distance) attempts_ = 0;

@@ -183,6 +183,46 @@ TEST(Recovery, GivesUpWithAReasonAfterMaxAttempts) {
   EXPECT_NE(o->note.find("gave up: boxed in after 2 recoveries"), std::string::npos) << o->note;
 }
 
+TEST(Recovery, NoProgressIsSeenThroughARouteReplannedEvery2Seconds) {
+  // The robot turns this way and that (the planner always has a command:
+  // never blocked) and goes nowhere, while its route is replanned every
+  // 2 s, a little longer or shorter each time. The time since the last
+  // progress keeps running across the replans: a no-progress recovery
+  // starts after progress_time. Real progress on a new route still counts.
+  NavigationParams nav;
+  const RobotParams r = fastRobot();
+  RecoveryParams rp;
+  Recovery rec(rp, r, nav);
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, {});
+  PlannerInput in;
+  in.map = &map;
+  in.pose = {0, 0, 0};
+  in.path = {{0, 0}, {5, 0}};
+  PlannerOutput turning;
+  turning.ok = true;
+  turning.cmd = {0, 0.5};
+  rec.newGoal(0);
+  std::optional<double> started;
+  for (double t = 0; t < 30 && !started; t += 0.1) {
+    const int k = static_cast<int>(std::lround(t * 10));
+    if (k > 0 && k % 20 == 0) rec.routeChanged(t);
+    const double left = 5.0 + ((k / 20) % 2 ? 0.2 : -0.2);  // each new route a little different
+    if (rec.step(t, in, turning, false, left)) started = t;
+  }
+  ASSERT_TRUE(started) << "no recovery in 30 s";
+  EXPECT_NEAR(*started, rp.progress_time, 0.3);
+  // A robot that gains 0.1 m/s along each new route is making progress.
+  Recovery moving(rp, r, nav);
+  moving.newGoal(0);
+  for (double t = 0; t < 30; t += 0.1) {
+    const int k = static_cast<int>(std::lround(t * 10));
+    if (k > 0 && k % 20 == 0) moving.routeChanged(t);
+    const double left = 5.0 - 0.1 * t + ((k / 20) % 2 ? 0.2 : -0.2);
+    EXPECT_FALSE(moving.step(t, in, turning, false, left)) << "t " << t;
+  }
+}
+
 TEST(PlannerSupervisor, GoalDwaNeverProposesWhatTheSupervisorWouldStopOverRandomScenes) {
   // One notion of admissible: whatever goal-dwa proposes, the supervisor
   // passes unchanged (same footprint, braking model and safe distance).
