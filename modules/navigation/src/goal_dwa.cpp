@@ -65,8 +65,15 @@ class GoalDwa final : public LocalPlanner {
     }
     // Standing still is not a way to the goal: when nothing else is
     // admissible the planner says so and the supervisor stops.
+    // Arriving: no faster than stops at the goal (within half the
+    // tolerance) at the robot's deceleration, where the window allows.
+    const double v_arrive =
+        in.goal
+            ? std::max(win.v_lo, std::sqrt(2 * r_.acc_v * std::max(0.0, to_goal - goal_tol_ / 2)))
+            : std::numeric_limits<double>::infinity();
     for (const Twist& s : sampleWindow(win, d_))
-      if ((!turn_only || std::abs(s.v) < 1e-9) && (std::abs(s.v) > 1e-6 || std::abs(s.w) > 1e-6))
+      if ((!turn_only || std::abs(s.v) < 1e-9) && (std::abs(s.v) > 1e-6 || std::abs(s.w) > 1e-6) &&
+          s.v <= v_arrive + 1e-9)
         samples.push_back(s);
     if (turn_only) {
       // Slow down first when still moving: v from the window's low end.
@@ -100,20 +107,11 @@ class GoalDwa final : public LocalPlanner {
             brakingScale(*in.map, in.pose, s, r_, d_.sim_step, r_.safe_distance, ms) >= 1.0) {
           ++out.admissible;
           const double ts = std::min(g_.score_time, d_.sim_time);
-          const TPose2D e = motion ? motion->pose(ts) : integrateArc(in.pose, s.v, s.w, ts);
-          const double turned = motion ? motion->turned(ts) : s.w * ts;
-          // The heading error after ts, unwrapped: the turn still needed
-          // (from the start heading, within +-pi) less the turn made,
-          // which may exceed pi at a fast robot's turn rate. Wrapping it
-          // would make a spin past the target look as good as stopping on it.
-          double needed;
-          if (in.goal && to_goal < goal_tol_)
-            needed = angleDiff(target_heading, in.pose.phi);
-          else {
-            const TPoint2D t = lookaheadPoint(path, e.x, e.y, g_.lookahead, corner_);
-            needed = angleDiff(std::atan2(t.y - e.y, t.x - e.x), in.pose.phi);
-          }
-          const double heading_err = std::abs(needed - turned);
+          // the distance to the route where it has reached the goal, if it does within ts
+          const double te = arrives(in, to_goal, s, ts) ? to_goal / std::abs(s.v) : ts;
+          const TPose2D e = motion ? motion->pose(te) : integrateArc(in.pose, s.v, s.w, te);
+          const double heading_err =
+              headingError(in, path, to_goal, target_heading, s, motion ? &*motion : nullptr, ts);
           const double path_dist = distanceToPath(path, e.x, e.y);
           const double speed = r_.v_max > 0 ? (r_.v_max - s.v) / r_.v_max : 0;
           tr.cost = g_.k_heading * heading_err + g_.k_path * path_dist + g_.k_speed * speed +
@@ -141,6 +139,41 @@ class GoalDwa final : public LocalPlanner {
   }
 
  private:
+  /** The heading critic of `s` (rad). Taken after `ts` (along `motion`
+   *  when given), unwrapped: the turn still needed (from the start heading,
+   *  within +-pi) less the turn made, which may exceed pi at a fast robot's
+   *  turn rate; wrapping it would make a spin past the target look as good
+   *  as stopping on it. When `s` reaches the goal within `ts`, it is the
+   *  angle by which the pose where it has covered the distance to the goal
+   *  misses it (seen from the start): scored beyond the goal, every fast
+   *  candidate would face back at it, and the robot crept to a stop short of it. */
+  /** True when `s` covers the distance to the goal (not yet within the
+   *  tolerance) within `ts`. */
+  bool arrives(const PlannerInput& in, double to_goal, const Twist& s, double ts) const {
+    return in.goal && to_goal >= goal_tol_ && std::abs(s.v) * ts > to_goal;
+  }
+  double headingError(const PlannerInput& in, const std::vector<TPoint2D>& path, double to_goal,
+                      double target_heading, const Twist& s, const CommandMotion* motion,
+                      double ts) const {
+    auto poseAt = [&](double t) {
+      return motion ? motion->pose(t) : integrateArc(in.pose, s.v, s.w, t);
+    };
+    if (arrives(in, to_goal, s, ts)) {
+      const TPose2D a = poseAt(to_goal / std::abs(s.v));
+      return std::atan2(std::hypot(in.goal->x - a.x, in.goal->y - a.y), to_goal);
+    }
+    const TPose2D e = poseAt(ts);
+    const double turned = motion ? motion->turned(ts) : s.w * ts;
+    double needed;
+    if (in.goal && to_goal < goal_tol_)
+      needed = angleDiff(target_heading, in.pose.phi);
+    else {
+      const TPoint2D t = lookaheadPoint(path, e.x, e.y, g_.lookahead, corner_);
+      needed = angleDiff(std::atan2(t.y - e.y, t.x - e.x), in.pose.phi);
+    }
+    return std::abs(needed - turned);
+  }
+
   DwaParams d_;
   GoalDwaParams g_;
   double goal_tol_, goal_tol_deg_;

@@ -488,5 +488,50 @@ TEST(GoalDwa, FromTheMeasuredVelocityNeverTouchesAPostAt2MetresPerSecond) {
   EXPECT_GT(runs, 8);
 }
 
+TEST(GoalDwa, ArrivesAtTheGoalAt2MetresPerSecondAndStopsWithinTheTolerance) {
+  // The goal 0.65 m away, 6 deg off the heading, a robot at rest that can
+  // drive at 2 m/s (2 m/s^2: 1 m to stop). Critics taken 1.5 s ahead put
+  // every candidate faster than a crawl beyond the goal, facing back at it:
+  // the robot crept and dithered short of it. It arrives no faster than it
+  // can stop, and ends within the goal tolerance.
+  NavigationParams nav;
+  nav.goal_tolerance = 0.3;
+  nav.goal_tolerance_deg = 180;
+  const RobotParams r = fastRobot();
+  auto planner = makeGoalDwa(nav, r);
+  const SafetySupervisor sup(nav, r);
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, {});
+  const TPoint2D goal{0.65 * std::cos(0.1), 0.65 * std::sin(0.1)};
+  Base base{r};
+  bool reached = false;
+  for (int k = 0; k < 100 && !reached; ++k) {
+    PlannerInput in;
+    in.map = &map;
+    in.pose = base.pose;
+    in.current = base.vel;
+    MotionState m{base.vel, base.cmd, base.latency, 0.1};
+    if (!base.pending.empty()) m.commanded = base.pending.back().second;
+    in.motion = m;
+    in.path = {{0, 0}, goal};
+    in.goal = TPose2D{goal.x, goal.y, 0};
+    SafetyInput s;
+    s.now = 10;
+    s.last_scan_time = 9.95;
+    s.last_odom_time = 9.99;
+    s.plan = planner->plan(in);
+    s.pose = base.pose;
+    s.map = &map;
+    s.motion = m;
+    reached = s.plan.status == PlanStatus::GoalReached;
+    base.send(sup.apply(s).cmd);
+    ASSERT_TRUE(base.run(map, 0.1));
+  }
+  ASSERT_TRUE(reached) << "at x = " << base.pose.x;
+  base.send({0, 0});
+  base.run(map, 2.0);  // braking to a stop
+  EXPECT_LT(std::hypot(base.pose.x - goal.x, base.pose.y - goal.y), nav.goal_tolerance);
+}
+
 }  // namespace
 }  // namespace carenav::navigation
