@@ -34,6 +34,7 @@ class GoalDwa final : public LocalPlanner {
         corner_(g.corner_deg > 0 ? mrpt::DEG2RAD(g.corner_deg) : M_PI) {}
   std::string name() const override { return "goal-dwa"; }
   bool needsUserIntent() const override { return false; }
+  bool usesMotionState() const override { return true; }
 
   PlannerOutput plan(const PlannerInput& in) override {
     PlannerOutput out;

@@ -302,7 +302,7 @@ Navigator::Cycle Navigator::cycle(double now) {
   in.t = now;
   in.pose = odom_;
   in.current = measured_;
-  in.motion = motionState();
+  if (planner_->usesMotionState()) in.motion = motionState();
   in.map = &map_;
   if (planner_->needsUserIntent()) in.user = user_;
   if (goal_) {

@@ -187,6 +187,12 @@ class LocalPlanner {
   virtual PlannerOutput plan(const PlannerInput& in) = 0;
   /** Walker-style planners need the user's command; goal planners a path. */
   virtual bool needsUserIntent() const = 0;
+  /** True when the planner rolls its candidates out from the robot's state
+   *  (PlannerInput::motion, goal-dwa): the Navigator then gives it that
+   *  state and the supervisor judges its commands from the same state. The
+   *  others' commands are judged as taken at once, as they plan them, so
+   *  that planner and supervisor never judge different motions. */
+  virtual bool usesMotionState() const { return false; }
 };
 
 using PlannerFactory =
