@@ -64,18 +64,7 @@ class GoalDwa final : public LocalPlanner {
       turn_only =
           std::abs(angleDiff(target_heading, in.pose.phi)) > mrpt::DEG2RAD(g_.turn_in_place_deg);
     }
-    // Standing still is not a way to the goal: when nothing else is
-    // admissible the planner says so and the supervisor stops.
-    // Arriving: no faster than stops at the goal (within half the
-    // tolerance) at the robot's deceleration, where the window allows.
-    const double v_arrive =
-        in.goal
-            ? std::max(win.v_lo, std::sqrt(2 * r_.acc_v * std::max(0.0, to_goal - goal_tol_ / 2)))
-            : std::numeric_limits<double>::infinity();
-    for (const Twist& s : sampleWindow(win, d_))
-      if ((!turn_only || std::abs(s.v) < 1e-9) && (std::abs(s.v) > 1e-6 || std::abs(s.w) > 1e-6) &&
-          s.v <= v_arrive + 1e-9)
-        samples.push_back(s);
+    samples = candidates(in, win, to_goal, turn_only);
     if (turn_only) {
       // Slow down first when still moving: v from the window's low end.
       if (samples.empty())
@@ -148,6 +137,24 @@ class GoalDwa final : public LocalPlanner {
    *  angle by which the pose where it has covered the distance to the goal
    *  misses it (seen from the start): scored beyond the goal, every fast
    *  candidate would face back at it, and the robot crept to a stop short of it. */
+  /** The window's samples that are worth scoring. Standing still is not a
+   *  way to the goal: when nothing else is admissible the planner says so
+   *  and the supervisor stops. Arriving, no faster than stops at the goal
+   *  (within half the tolerance) at the robot's deceleration, where the
+   *  window allows. */
+  std::vector<Twist> candidates(const PlannerInput& in, const Window& win, double to_goal,
+                                bool turn_only) const {
+    const double v_arrive =
+        in.goal
+            ? std::max(win.v_lo, std::sqrt(2 * r_.acc_v * std::max(0.0, to_goal - goal_tol_ / 2)))
+            : std::numeric_limits<double>::infinity();
+    std::vector<Twist> out;
+    for (const Twist& s : sampleWindow(win, d_))
+      if ((!turn_only || std::abs(s.v) < 1e-9) && (std::abs(s.v) > 1e-6 || std::abs(s.w) > 1e-6) &&
+          s.v <= v_arrive + 1e-9)
+        out.push_back(s);
+    return out;
+  }
   /** True when `s` covers the distance to the goal (not yet within the
    *  tolerance) within `ts`. */
   bool arrives(const PlannerInput& in, double to_goal, const Twist& s, double ts) const {
