@@ -35,6 +35,9 @@ const ParamTable<RobotParams>& RobotParams::table() {
           .real("acc_w", &RobotParams::acc_w, "rad/s^2", 0.01, 20.0, "angular acceleration limit")
           .real("safe_distance", &RobotParams::safe_distance, "m", 0.0, 5.0,
                 "free distance to keep ahead of the footprint")
+          .real("command_latency", &RobotParams::command_latency, "s", 0.0, 2.0,
+                "between a velocity command and its effect on the base: the planners' rollouts "
+                "and the safety supervisor start from the measured velocity and the last command")
           .check([](const RobotParams& r) -> std::optional<std::string> {
             bool contains_origin = false;  // crossing number for (0,0)
             const auto& p = r.footprint;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace carenav::navigation {
 
@@ -33,6 +34,7 @@ class GoalDwa final : public LocalPlanner {
         corner_(g.corner_deg > 0 ? mrpt::DEG2RAD(g.corner_deg) : M_PI) {}
   std::string name() const override { return "goal-dwa"; }
   bool needsUserIntent() const override { return false; }
+  bool usesMotionState() const override { return true; }
 
   PlannerOutput plan(const PlannerInput& in) override {
     PlannerOutput out;
@@ -62,11 +64,7 @@ class GoalDwa final : public LocalPlanner {
       turn_only =
           std::abs(angleDiff(target_heading, in.pose.phi)) > mrpt::DEG2RAD(g_.turn_in_place_deg);
     }
-    // Standing still is not a way to the goal: when nothing else is
-    // admissible the planner says so and the supervisor stops.
-    for (const Twist& s : sampleWindow(win, d_))
-      if ((!turn_only || std::abs(s.v) < 1e-9) && (std::abs(s.v) > 1e-6 || std::abs(s.w) > 1e-6))
-        samples.push_back(s);
+    samples = candidates(in, win, to_goal, turn_only);
     if (turn_only) {
       // Slow down first when still moving: v from the window's low end.
       if (samples.empty())
@@ -78,30 +76,32 @@ class GoalDwa final : public LocalPlanner {
     auto evaluate = [&](const std::vector<Twist>& candidates) {
       double best = std::numeric_limits<double>::infinity();
       for (const Twist& s : candidates) {
-        Trajectory tr =
-            rollout(*in.map, in.pose, s, d_.sim_time, d_.sim_step, cap, d_.obstacle_distance_cap);
+        // With the robot's dynamics (in.motion): the motion it will make
+        // when s is sent now, and the supervisor's own stop test of it.
+        std::optional<CommandMotion> motion;
+        if (in.motion) motion.emplace(in.pose, *in.motion, s, r_);
+        Trajectory tr = motion ? rollout(*in.map, *motion, s, d_.sim_time, d_.sim_step, cap,
+                                         d_.obstacle_distance_cap)
+                               : rollout(*in.map, in.pose, s, d_.sim_time, d_.sim_step, cap,
+                                         d_.obstacle_distance_cap);
         ++out.evaluated;
         // Admissible: brakes before the first contact, and the supervisor
         // (same footprint, braking model and safe distance) passes it unchanged.
-        if (!tr.leaves_map &&
-            canBrake(s, tr.time_to_collision, r_, r_.safe_distance,
-                     in.map->footprint().circumscribed) &&
-            brakingScale(*in.map, in.pose, s, r_, d_.sim_step) >= 1.0) {
+        // (from the robot's state: no contact before a stop sent next cycle
+        // could act, then the supervisor's own stop test)
+        const bool brakes = motion ? tr.time_to_collision > in.motion->latency + in.motion->period
+                                   : canBrake(s, tr.time_to_collision, r_, r_.safe_distance,
+                                              in.map->footprint().circumscribed);
+        const MotionState* ms = in.motion ? &*in.motion : nullptr;
+        if (!tr.leaves_map && brakes &&
+            brakingScale(*in.map, in.pose, s, r_, d_.sim_step, r_.safe_distance, ms) >= 1.0) {
           ++out.admissible;
           const double ts = std::min(g_.score_time, d_.sim_time);
-          const TPose2D e = integrateArc(in.pose, s.v, s.w, ts);
-          // The heading error after ts, unwrapped: the turn still needed
-          // (from the start heading, within +-pi) less the turn made, w ts,
-          // which may exceed pi at a fast robot's turn rate. Wrapping it
-          // would make a spin past the target look as good as stopping on it.
-          double needed;
-          if (in.goal && to_goal < goal_tol_)
-            needed = angleDiff(target_heading, in.pose.phi);
-          else {
-            const TPoint2D t = lookaheadPoint(path, e.x, e.y, g_.lookahead, corner_);
-            needed = angleDiff(std::atan2(t.y - e.y, t.x - e.x), in.pose.phi);
-          }
-          const double heading_err = std::abs(needed - s.w * ts);
+          // the distance to the route where it has reached the goal, if it does within ts
+          const double te = arrives(in, to_goal, s, ts) ? to_goal / std::abs(s.v) : ts;
+          const TPose2D e = motion ? motion->pose(te) : integrateArc(in.pose, s.v, s.w, te);
+          const double heading_err =
+              headingError(in, path, to_goal, target_heading, s, motion ? &*motion : nullptr, ts);
           const double path_dist = distanceToPath(path, e.x, e.y);
           const double speed = r_.v_max > 0 ? (r_.v_max - s.v) / r_.v_max : 0;
           tr.cost = g_.k_heading * heading_err + g_.k_path * path_dist + g_.k_speed * speed +
@@ -129,6 +129,59 @@ class GoalDwa final : public LocalPlanner {
   }
 
  private:
+  /** The heading critic of `s` (rad). Taken after `ts` (along `motion`
+   *  when given), unwrapped: the turn still needed (from the start heading,
+   *  within +-pi) less the turn made, which may exceed pi at a fast robot's
+   *  turn rate; wrapping it would make a spin past the target look as good
+   *  as stopping on it. When `s` reaches the goal within `ts`, it is the
+   *  angle by which the pose where it has covered the distance to the goal
+   *  misses it (seen from the start): scored beyond the goal, every fast
+   *  candidate would face back at it, and the robot crept to a stop short of it. */
+  /** The window's samples that are worth scoring. Standing still is not a
+   *  way to the goal: when nothing else is admissible the planner says so
+   *  and the supervisor stops. Arriving, no faster than stops at the goal
+   *  (within half the tolerance) at the robot's deceleration, where the
+   *  window allows. */
+  std::vector<Twist> candidates(const PlannerInput& in, const Window& win, double to_goal,
+                                bool turn_only) const {
+    const double v_arrive =
+        in.goal
+            ? std::max(win.v_lo, std::sqrt(2 * r_.acc_v * std::max(0.0, to_goal - goal_tol_ / 2)))
+            : std::numeric_limits<double>::infinity();
+    std::vector<Twist> out;
+    for (const Twist& s : sampleWindow(win, d_))
+      if ((!turn_only || std::abs(s.v) < 1e-9) && (std::abs(s.v) > 1e-6 || std::abs(s.w) > 1e-6) &&
+          s.v <= v_arrive + 1e-9)
+        out.push_back(s);
+    return out;
+  }
+  /** True when `s` covers the distance to the goal (not yet within the
+   *  tolerance) within `ts`. */
+  bool arrives(const PlannerInput& in, double to_goal, const Twist& s, double ts) const {
+    return in.goal && to_goal >= goal_tol_ && std::abs(s.v) * ts > to_goal;
+  }
+  double headingError(const PlannerInput& in, const std::vector<TPoint2D>& path, double to_goal,
+                      double target_heading, const Twist& s, const CommandMotion* motion,
+                      double ts) const {
+    auto poseAt = [&](double t) {
+      return motion ? motion->pose(t) : integrateArc(in.pose, s.v, s.w, t);
+    };
+    if (arrives(in, to_goal, s, ts)) {
+      const TPose2D a = poseAt(to_goal / std::abs(s.v));
+      return std::atan2(std::hypot(in.goal->x - a.x, in.goal->y - a.y), to_goal);
+    }
+    const TPose2D e = poseAt(ts);
+    const double turned = motion ? motion->turned(ts) : s.w * ts;
+    double needed;
+    if (in.goal && to_goal < goal_tol_)
+      needed = angleDiff(target_heading, in.pose.phi);
+    else {
+      const TPoint2D t = lookaheadPoint(path, e.x, e.y, g_.lookahead, corner_);
+      needed = angleDiff(std::atan2(t.y - e.y, t.x - e.x), in.pose.phi);
+    }
+    return std::abs(needed - turned);
+  }
+
   DwaParams d_;
   GoalDwaParams g_;
   double goal_tol_, goal_tol_deg_;

@@ -39,8 +39,14 @@ TPose2D integrateArc(const TPose2D& p, double v, double w, double t) {
           phi - 2 * M_PI * std::round(phi / (2 * M_PI))};
 }
 
-Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& cmd, double horizon,
-                   double step, double clearance_cap, double check_distance) {
+namespace {
+
+/** The rollout's loop; `poseAt(t, p, sp, cp)` sets the pose at t and the
+ *  sine and cosine of its heading. */
+template <class PoseAt>
+Trajectory rolloutWith(const LocalCostmap& map, const TPose2D& start, const Twist& cmd,
+                       double horizon, double step, double clearance_cap, double check_distance,
+                       double settled, const PoseAt& poseAt) {
   Trajectory tr;
   tr.cmd = cmd;
   tr.time_to_collision = horizon;
@@ -48,37 +54,24 @@ Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& c
   tr.contact_time = std::numeric_limits<double>::infinity();
   tr.clearance = clearance_cap;
   tr.end = start;
-  const bool still = cmd.v == 0 && cmd.w == 0;
+  const bool still = cmd.v == 0 && cmd.w == 0 && settled <= 0;
   const int steps = still ? 0 : std::max(1, static_cast<int>(std::ceil(horizon / step - 1e-9)));
   // Beyond the horizon, collisions only, up to check_distance of path (at
   // most 60 s of it).
   int check_steps = steps;
   if (!still && std::abs(cmd.v) * horizon < check_distance)
-    check_steps =
-        static_cast<int>(std::ceil(std::min(60.0, check_distance / std::abs(cmd.v)) / step - 1e-9));
+    check_steps = static_cast<int>(
+        std::ceil(std::min(60.0, check_distance / std::max(std::abs(cmd.v), 1e-9)) / step - 1e-9));
   const double sweep = std::abs(cmd.v) + std::abs(cmd.w) * map.footprint().circumscribed;
-  // integrateArc, with the heading's sine and cosine kept for the footprint
-  const double s0 = std::sin(start.phi), c0 = std::cos(start.phi);
-  const bool straight = std::abs(cmd.w) < 1e-9;
-  const double radius = straight ? 0.0 : cmd.v / cmd.w;
   for (int k = 0; k <= check_steps; ++k) {
     const double t = k <= steps ? std::min(horizon, k * step) : k * step;
-    TPose2D p = start;
-    double sp = s0, cp = c0;
-    if (k > 0) {
-      if (straight) {
-        p = {start.x + cmd.v * t * c0, start.y + cmd.v * t * s0, start.phi};
-      } else {
-        const double phi = start.phi + cmd.w * t;
-        sp = std::sin(phi);
-        cp = std::cos(phi);
-        p = {start.x + radius * (sp - s0), start.y - radius * (cp - c0),
-             phi - 2 * M_PI * std::round(phi / (2 * M_PI))};
-      }
-    }
     // Beyond the horizon only contact matters: no clearance wanted (cheaper);
     // and once an arc has closed its circle, the rest repeats it.
-    if (k > steps && std::abs(cmd.w) * (t - step) >= 2 * M_PI) break;
+    if (k > steps && t - step > settled && std::abs(cmd.w) * (t - step - settled) >= 2 * M_PI)
+      break;
+    TPose2D p = start;
+    double sp = std::sin(start.phi), cp = std::cos(start.phi);
+    if (k > 0) poseAt(t, p, sp, cp);
     const FootprintCheck c = map.check(p, k > steps ? 0.0 : clearance_cap, cp, sp);
     if (c.outside) {
       if (k <= steps) tr.leaves_map = true;
@@ -102,6 +95,78 @@ Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& c
     tr.end = p;
   }
   return tr;
+}
+
+}  // namespace
+
+Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& cmd, double horizon,
+                   double step, double clearance_cap, double check_distance) {
+  // integrateArc, with the heading's sine and cosine kept for the footprint
+  const double s0 = std::sin(start.phi), c0 = std::cos(start.phi);
+  const bool straight = std::abs(cmd.w) < 1e-9;
+  const double radius = straight ? 0.0 : cmd.v / cmd.w;
+  return rolloutWith(map, start, cmd, horizon, step, clearance_cap, check_distance, 0.0,
+                     [&](double t, TPose2D& p, double& sp, double& cp) {
+                       if (straight) {
+                         p = {start.x + cmd.v * t * c0, start.y + cmd.v * t * s0, start.phi};
+                         return;
+                       }
+                       const double phi = start.phi + cmd.w * t;
+                       sp = std::sin(phi);
+                       cp = std::cos(phi);
+                       p = {start.x + radius * (sp - s0), start.y - radius * (cp - c0),
+                            phi - 2 * M_PI * std::round(phi / (2 * M_PI))};
+                     });
+}
+
+Trajectory rollout(const LocalCostmap& map, const CommandMotion& motion, const Twist& cmd,
+                   double horizon, double step, double clearance_cap, double check_distance) {
+  return rolloutWith(map, motion.pose(0), cmd, horizon, step, clearance_cap, check_distance,
+                     motion.settled(), [&](double t, TPose2D& p, double& sp, double& cp) {
+                       p = motion.pose(t);
+                       sp = std::sin(p.phi);
+                       cp = std::cos(p.phi);
+                     });
+}
+
+CommandMotion::CommandMotion(const TPose2D& start, const MotionState& st, const Twist& cmd,
+                             const RobotParams& r, double brake_at) {
+  Twist u = st.current;
+  Knot k{start, 0.0};
+  knots_.push_back(k);
+  auto target = [&](double t) {
+    if (t + 1e-9 < st.latency) return st.commanded;
+    return t + 1e-9 < brake_at ? cmd : Twist{};
+  };
+  auto toward = [&](double x, double to, double a) {
+    return x + std::clamp(to - x, -a * dt_, a * dt_);
+  };
+  // At most 60 s of ramps (a robot without acceleration limits settles at once).
+  for (int i = 0; i < 6000; ++i) {
+    const double t = i * dt_;
+    const Twist g = target(t);
+    const bool later = t + 1e-9 < st.latency || (std::isfinite(brake_at) && t + 1e-9 < brake_at);
+    if (!later && std::abs(u.v - g.v) < 1e-9 && std::abs(u.w - g.w) < 1e-9) break;
+    u = {r.acc_v > 0 ? toward(u.v, g.v, r.acc_v) : g.v,
+         r.acc_w > 0 ? toward(u.w, g.w, r.acc_w) : g.w};
+    k.pose = integrateArc(k.pose, u.v, u.w, dt_);
+    k.turned += u.w * dt_;
+    knots_.push_back(k);
+  }
+  settle_t_ = (knots_.size() - 1) * dt_;
+  final_ = u;
+}
+
+TPose2D CommandMotion::pose(double t) const {
+  if (t >= settle_t_) return integrateArc(knots_.back().pose, final_.v, final_.w, t - settle_t_);
+  const size_t i = static_cast<size_t>(std::max(0.0, t) / dt_ + 0.5);
+  return knots_[std::min(i, knots_.size() - 1)].pose;
+}
+
+double CommandMotion::turned(double t) const {
+  if (t >= settle_t_) return knots_.back().turned + final_.w * (t - settle_t_);
+  const size_t i = static_cast<size_t>(std::max(0.0, t) / dt_ + 0.5);
+  return knots_[std::min(i, knots_.size() - 1)].turned;
 }
 
 double marginTime(const Twist& cmd, double margin, double sweep_radius) {

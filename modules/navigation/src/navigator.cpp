@@ -236,8 +236,21 @@ std::optional<double> Navigator::intentDeviation(const Twist& user, const Twist&
   return std::hypot(cmd.v - uc.v, cmd.w - uc.w);
 }
 
+MotionState Navigator::motionState() const {
+  MotionState m;
+  m.current = measured_;
+  m.commanded = last_cmd_;
+  m.latency = robot_.command_latency;
+  // The control period as measured between cycles (the rollout step until
+  // two cycles have run).
+  m.period = period_ > 0 ? period_ : p_.sim_step;
+  return m;
+}
+
 Navigator::Cycle Navigator::cycle(double now) {
   Cycle c;
+  if (last_cycle_ && now > *last_cycle_ && now - *last_cycle_ < 1.0) period_ = now - *last_cycle_;
+  last_cycle_ = now;
   memory_.prune(now, {odom_.x, odom_.y});
   std::vector<TPoint2D> obstacles = memory_.points();
   obstacles.insert(obstacles.end(), perceived_.begin(), perceived_.end());
@@ -289,6 +302,7 @@ Navigator::Cycle Navigator::cycle(double now) {
   in.t = now;
   in.pose = odom_;
   in.current = measured_;
+  if (planner_->usesMotionState()) in.motion = motionState();
   in.map = &map_;
   if (planner_->needsUserIntent()) in.user = user_;
   if (goal_) {
@@ -323,7 +337,9 @@ Navigator::Cycle Navigator::cycle(double now) {
   s.plan = c.plan;
   s.pose = odom_;
   s.map = &map_;
+  s.motion = in.motion;
   c.decision = supervisor_.apply(s);
+  last_cmd_ = c.decision.cmd;
   // Held: stopped, or slowed to a crawl (the planner and the supervisor
   // share the braking rule, so this is rare: a recovery's business).
   blocked_ = c.decision.action == SafetyAction::Stop ||

@@ -114,7 +114,9 @@ bool Recovery::reverseAdmissible(const LocalCostmap& map, const TPose2D& pose,
   if (cmd.v == 0 || cmd.v < r_.v_min - 1e-9 || cmd.v > r_.v_max + 1e-9 || path_.size() < 2)
     return false;
   // The supervisor's rule, unchanged: the command passes without slowing.
-  if (brakingScale(map, pose, cmd, r_, nav_.sim_step, p_.backup_margin) < 1.0) return false;
+  if (brakingScale(map, pose, cmd, r_, nav_.sim_step, p_.backup_margin,
+                   motion_ ? &*motion_ : nullptr) < 1.0)
+    return false;
   // ... and the poses it sweeps until it could stop (one cycle, braking and
   // the safe distance) stay on the way the robot came.
   const double u = std::abs(cmd.v);
@@ -184,8 +186,8 @@ std::optional<Twist> Recovery::spinCommand(const PlannerInput& in) const {
     if (spin_dir_ != 0 && dir != spin_dir_) break;  // a turn keeps its direction
     const Twist cmd{0, dir * w};
     const Trajectory tr = rollout(*in.map, in.pose, cmd, angle / w, nav_.sim_step / 2, 0.0);
-    if (tr.admissible() &&
-        brakingScale(*in.map, in.pose, cmd, r_, nav_.sim_step, p_.backup_margin) >= 1.0)
+    if (tr.admissible() && brakingScale(*in.map, in.pose, cmd, r_, nav_.sim_step, p_.backup_margin,
+                                        motion_ ? &*motion_ : nullptr) >= 1.0)
       return cmd;
   }
   return std::nullopt;
@@ -200,13 +202,17 @@ PlannerOutput Recovery::command(const Twist& cmd, const std::string& note) const
   return o;
 }
 
-void Recovery::routeChanged(double now) {
-  have_best_ = false;
-  best_t_ = now;
+void Recovery::routeChanged(double) {
+  // Progress is measured on the new route from the next cycle, but the time
+  // since the last progress keeps running: a route replanned every few
+  // seconds around a robot that goes nowhere must not hide that it does.
+  rebase_ = true;
 }
 
 void Recovery::newGoal(double now) {
-  routeChanged(now);
+  have_best_ = false;
+  rebase_ = false;
+  best_t_ = now;
   phase_ = Phase::Idle;
   reason_.clear();
   attempts_ = 0;
@@ -248,12 +254,19 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
                                             const PlannerOutput& plan, bool blocked,
                                             double route_left) {
   if (!p_.enabled) return std::nullopt;
+  motion_ = in.motion;
   if (phase_ == Phase::GaveUp) {
     PlannerOutput o;
     o.note = "gave up: " + reason_;
     return o;
   }
   // Progress along the route (near the goal: turning to its heading is progress).
+  if (rebase_ && have_best_) {
+    // the new route's length, less what was gained since the best on the old one
+    best_left_ = route_left + std::max(0.0, best_left_ - last_left_);
+  }
+  rebase_ = false;
+  last_left_ = route_left;
   if (!have_best_ || route_left < best_left_ - p_.progress_distance ||
       route_left < nav_.goal_tolerance) {
     if (have_best_ && route_left < best_left_ - p_.progress_distance) attempts_ = 0;

@@ -38,6 +38,11 @@ struct RobotParams {
   double acc_v = 0.5;           ///< m/s^2, linear acceleration (and braking) limit
   double acc_w = 1.0;           ///< rad/s^2, angular acceleration limit
   double safe_distance = 0.25;  ///< m, distance to keep in front of the footprint
+  /** s, between a velocity command and its effect on the base (the
+   *  simulator's [sim] latency is 0.05 s by default): rollouts and the
+   *  braking rule start from the measured velocity and the last command
+   *  (navigation::MotionState). */
+  double command_latency = 0.05;
   static const ParamTable<RobotParams>& table();
   /** Radius of the smallest circle about the origin holding the footprint. */
   double circumscribedRadius() const;

@@ -8,6 +8,7 @@
 #include <carenav/navigation/navigation_params.h>
 
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -24,6 +25,50 @@ struct Twist {
 
 /** Pose after moving for `t` seconds at constant (v, w) from `p` (exact arc). */
 TPose2D integrateArc(const TPose2D& p, double v, double w, double t);
+
+/** Where a new command starts from: the robot does not take it at once.
+ *  The command sent now takes effect `latency` seconds later (until then
+ *  the last one sent still drives), and each of v and w then moves towards
+ *  its target at the robot's acceleration (acc_v, acc_w), as the simulator
+ *  and a velocity-controlled base do. The next command (a stop) can be sent
+ *  `period` seconds later (the control cycle). The trajectory generators of
+ *  ROS's base_local_planner start from the measured velocity likewise. */
+struct MotionState {
+  Twist current;       ///< measured velocity now
+  Twist commanded;     ///< the last command sent: it drives for `latency`
+  double latency = 0;  ///< s, between a command and its effect
+  double period = 0;   ///< s, until the next command can be sent
+};
+
+/** The motion of the robot given `cmd` now from `state` (MotionState): v
+ *  and w go towards state.commanded for the latency, then towards `cmd`,
+ *  and from `brake_at` seconds on (when finite) towards 0, each at the
+ *  robot's acceleration. Integrated every 10 ms until the velocity settles,
+ *  then exact arcs. */
+class CommandMotion {
+ public:
+  CommandMotion(const TPose2D& start, const MotionState& state, const Twist& cmd,
+                const RobotParams& robot,
+                double brake_at = std::numeric_limits<double>::infinity());
+  /** Pose after t seconds (heading wrapped to [-pi, pi]). */
+  TPose2D pose(double t) const;
+  /** rad, the heading change after t seconds, not wrapped. */
+  double turned(double t) const;
+  /** s from which the velocity is constant (cmd, or 0 once braked). */
+  double settled() const { return settle_t_; }
+  /** The velocity from settled() on. */
+  const Twist& final() const { return final_; }
+
+ private:
+  struct Knot {
+    TPose2D pose;
+    double turned = 0;
+  };
+  double dt_ = 0.01;
+  std::vector<Knot> knots_;  // every dt_ from 0 to settle_t_
+  double settle_t_ = 0;
+  Twist final_;
+};
 
 /** One sampled trajectory of the dynamic window, rolled out on the cost map. */
 struct Trajectory {
@@ -54,6 +99,11 @@ struct Trajectory {
  *  repeats it, at the sampling resolution). */
 Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& cmd, double horizon,
                    double step, double clearance_cap, double check_distance = 0);
+/** The same along `motion` (the robot's motion given `cmd`, CommandMotion)
+ *  instead of the arc of `cmd` from the start: what the robot will
+ *  actually do when `cmd` is sent now. */
+Trajectory rollout(const LocalCostmap& map, const CommandMotion& motion, const Twist& cmd,
+                   double horizon, double step, double clearance_cap, double check_distance = 0);
 
 /** s of `cmd` that cover `margin` metres: of path when it moves; of a
  *  corner's travel (the turn times `sweep_radius`, the footprint's
@@ -74,6 +124,10 @@ struct PlannerInput {
   double t = 0;
   TPose2D pose;
   Twist current;  ///< measured velocity
+  /** The robot's dynamics for this cycle (the Navigator sets it): planners
+   *  roll candidates out from it (CommandMotion) and judge them with the
+   *  supervisor's stopRoom. Unset: a command is taken at once. */
+  std::optional<MotionState> motion;
   const LocalCostmap* map = nullptr;
   std::optional<Twist> user;    ///< the user's command (walker)
   std::vector<TPoint2D> path;   ///< global route ahead (goal navigation)
@@ -133,6 +187,12 @@ class LocalPlanner {
   virtual PlannerOutput plan(const PlannerInput& in) = 0;
   /** Walker-style planners need the user's command; goal planners a path. */
   virtual bool needsUserIntent() const = 0;
+  /** True when the planner rolls its candidates out from the robot's state
+   *  (PlannerInput::motion, goal-dwa): the Navigator then gives it that
+   *  state and the supervisor judges its commands from the same state. The
+   *  others' commands are judged as taken at once, as they plan them, so
+   *  that planner and supervisor never judge different motions. */
+  virtual bool usesMotionState() const { return false; }
 };
 
 using PlannerFactory =

@@ -109,6 +109,9 @@ class Navigator {
 
  private:
   PlannerOutput turnInPlace(const PlannerInput& in) const;
+  /** The robot's dynamics this cycle: measured velocity, last command,
+   *  command_latency and the control period. */
+  MotionState motionState() const;
   TPoint2D mapToOdom(const TPoint2D& p) const;
   TPose2D mapToOdom(const TPose2D& p) const;
 
@@ -137,6 +140,9 @@ class Navigator {
   bool rotate_request_ = false;
   Recovery recovery_;
   bool blocked_ = false;  // the last cycle held the robot (no plan, or stopped)
+  Twist last_cmd_;        // the command of the last cycle (still driving for the latency)
+  std::optional<double> last_cycle_;  // s, time of the last cycle (the control period)
+  double period_ = 0;                 // s, between the last two cycles
 };
 
 }  // namespace carenav::navigation

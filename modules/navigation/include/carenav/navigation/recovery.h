@@ -51,7 +51,10 @@ class Recovery {
    *  use instead of the plan while a recovery runs (or after giving up). */
   std::optional<PlannerOutput> step(double now, const PlannerInput& in, const PlannerOutput& plan,
                                     bool blocked, double route_left);
-  /** A fresh route (replanned): progress is measured on it from now. */
+  /** A fresh route (replanned): progress is measured on it from now, what
+   *  was gained since the last progress kept; the time since the last
+   *  progress keeps running (a robot whose route is replanned every few
+   *  seconds while it goes nowhere is still caught). */
   void routeChanged(double now);
   /** A new goal: whatever happened on the way to the last one (attempts,
    *  giving up) is forgotten; the recorded path is kept (still known free). */
@@ -99,11 +102,16 @@ class Recovery {
   std::optional<double> blocked_since_;
   double best_left_ = 0, best_t_ = 0;
   bool have_best_ = false;
+  bool rebase_ = false;   // a new route: best_left_ is measured on it from the next cycle
+  double last_left_ = 0;  // the route left at the last cycle
   // current recovery
   double phase_t0_ = 0;
   TPose2D phase_pose_;
   double backed_ = 0, spun_ = 0, spin_dir_ = 0;
   TPose2D last_pose_;
+  // the robot's dynamics of the cycle under way (PlannerInput::motion): the
+  // supervisor judges a recovery's command from it, so the recovery does too
+  std::optional<MotionState> motion_;
 };
 
 }  // namespace carenav::navigation

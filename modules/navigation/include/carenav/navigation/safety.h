@@ -20,6 +20,22 @@ namespace carenav::navigation {
  * every `step` / 2 seconds and known to one such step. 1: passes unchanged; 0: must stop. */
 double brakingScale(const LocalCostmap& map, const TPose2D& pose, const Twist& cmd,
                     const RobotParams& robot, double step, double margin);
+/** True when sending `cmd` now from `state` leaves the robot able to stop
+ *  `margin` before any contact: it follows `cmd` (CommandMotion: the last
+ *  command for the latency, then ramps at its accelerations) until a stop
+ *  sent at the next cycle takes effect (state.period + state.latency from
+ *  now), and for the time `cmd` needs to cover `margin` (marginTime) more,
+ *  then brakes at its limits; the footprint touches nothing and stays on
+ *  the map all along (checked every cell of sweep: path plus a corner's
+ *  travel, and where it stops). */
+bool canStopFrom(const LocalCostmap& map, const TPose2D& pose, const MotionState& state,
+                 const Twist& cmd, const RobotParams& robot, double margin);
+/** brakingScale from the robot's dynamics (`state`; nullptr: the command
+ *  at once, as above): the largest s in [0, 1] (to 1/64) for which
+ *  canStopFrom holds for (s v, s w); a robot already in contact gets
+ *  brakingScale's move-away rule. */
+double brakingScale(const LocalCostmap& map, const TPose2D& pose, const Twist& cmd,
+                    const RobotParams& robot, double step, double margin, const MotionState* state);
 /** The same with the robot's safe_distance as the margin. */
 inline double brakingScale(const LocalCostmap& map, const TPose2D& pose, const Twist& cmd,
                            const RobotParams& robot, double step) {
@@ -35,6 +51,9 @@ struct SafetyInput {
   std::optional<Twist> user;
   PlannerOutput plan;
   TPose2D pose;
+  /** The robot's dynamics (the Navigator sets it): the braking rule then
+   *  judges the motion the robot will make (canStopFrom), as goal-dwa does. */
+  std::optional<MotionState> motion;
   const LocalCostmap* map = nullptr;
 };
 
