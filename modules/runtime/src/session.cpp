@@ -4,7 +4,6 @@
 #include <carenav/navigation/mrpt_ptg.h>
 #include <carenav/perception/pipeline.h>
 #include <carenav/runtime/session.h>
-#include <carenav/sim/sim_params.h>
 
 #include <unistd.h>
 #include <chrono>
@@ -31,15 +30,15 @@ SessionSetup sessionSetup(const std::string& profile_path, const std::vector<std
 namespace {
 
 /** Unknown floor ahead from the profile: the reaction time is the command
- *  latency ([sim] latency: the time between a command and its effect, what
- *  the simulator gives the robot), one control cycle and one frame of the
+ *  latency ([robot] command_latency: the time between a command and its
+ *  effect, the same the planners' rollouts use), one control cycle and one frame of the
  *  camera; the margin the robot's safe_distance; "seen free" the perception
  *  grid's free threshold. */
 std::unique_ptr<UnknownAhead> makeUnknownAhead(const SessionSetup& s,
                                                const perception::PerceptionParams& percp,
                                                const SensorParams& camera) {
   UnknownAheadParams p;
-  p.command_latency = s.profile.section<sim::SimParams>("sim").latency;
+  p.command_latency = s.robot.command_latency;
   p.control_period = s.control_rate > 0 ? 1.0 / s.control_rate : 0.1;
   p.frame_period = camera.rate_hz > 0 ? 1.0 / camera.rate_hz : 0.1;
   p.margin = s.robot.safe_distance;

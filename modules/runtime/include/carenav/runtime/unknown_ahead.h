@@ -22,7 +22,7 @@ namespace carenav::navigation {
 
 /** What the braking distance and "seen free" are made of (from the profile). */
 struct UnknownAheadParams {
-  double command_latency = 0.05;  ///< s, between a command and its effect ([sim] latency)
+  double command_latency = 0.05;  ///< s, between a command and its effect ([robot] command_latency)
   double control_period = 0.1;    ///< s, one control cycle (the next chance to brake)
   double frame_period = 0.1;      ///< s, between depth frames (the zone's age at most)
   double margin = 0.25;           ///< m, kept before the zone: the robot's safe_distance
