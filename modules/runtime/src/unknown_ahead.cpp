@@ -38,6 +38,20 @@ bool UnknownAhead::inFootprint(double x, double y) const {
   return in;
 }
 
+template <class F>
+void UnknownAhead::forCellsAround(const mrpt::math::TPose2D& pose, double r, F&& f) const {
+  const double c = std::cos(pose.phi), s = std::sin(pose.phi);
+  const long i0 = static_cast<long>(std::floor((pose.x - r) / res_));
+  const long i1 = static_cast<long>(std::floor((pose.x + r) / res_));
+  const long j0 = static_cast<long>(std::floor((pose.y - r) / res_));
+  const long j1 = static_cast<long>(std::floor((pose.y + r) / res_));
+  for (long i = i0; i <= i1; ++i)
+    for (long j = j0; j <= j1; ++j) {
+      const double dx = (i + 0.5) * res_ - pose.x, dy = (j + 0.5) * res_ - pose.y;
+      f(i, j, c * dx + s * dy, -s * dx + c * dy);
+    }
+}
+
 void UnknownAhead::stoodOn(const mrpt::math::TPose2D& pose) {
   if (robot_.footprint.size() < 3) return;
   if (stood_.empty()) startStrip(pose);
@@ -45,39 +59,23 @@ void UnknownAhead::stoodOn(const mrpt::math::TPose2D& pose) {
     // Forget what lies far behind (rebuilt around the robot from now on).
     stood_.clear();
   }
-  const double c = std::cos(pose.phi), s = std::sin(pose.phi);
   const double r = std::max({front_, -back_, half_width_}) * std::sqrt(2.0);
-  const long i0 = static_cast<long>(std::floor((pose.x - r) / res_));
-  const long i1 = static_cast<long>(std::floor((pose.x + r) / res_));
-  const long j0 = static_cast<long>(std::floor((pose.y - r) / res_));
-  const long j1 = static_cast<long>(std::floor((pose.y + r) / res_));
-  for (long i = i0; i <= i1; ++i)
-    for (long j = j0; j <= j1; ++j) {
-      const double dx = (i + 0.5) * res_ - pose.x, dy = (j + 0.5) * res_ - pose.y;
-      const double x = c * dx + s * dy, y = -s * dx + c * dy;
-      // Centres on the outline count (pulled 1 mm towards the axle, inside).
-      const double k = 1.0 - 1e-3 / std::max(1e-3, std::hypot(x, y));
-      if (inFootprint(x, y) || inFootprint(k * x, k * y)) stood_.insert(key(i, j));
-    }
+  forCellsAround(pose, r, [&](long i, long j, double x, double y) {
+    // Centres on the outline count (pulled 1 mm towards the axle, inside).
+    const double k = 1.0 - 1e-3 / std::max(1e-3, std::hypot(x, y));
+    if (inFootprint(x, y) || inFootprint(k * x, k * y)) stood_.insert(key(i, j));
+  });
 }
 
 void UnknownAhead::startStrip(const mrpt::math::TPose2D& pose) {
   // The start: the zone at full speed ahead of the footprint, across its
   // width (the cells beside the camera's view there get no ray).
   const double x1 = front_ + reach(robot_.v_max);
-  const double c = std::cos(pose.phi), s = std::sin(pose.phi);
   const double r = std::hypot(x1, half_width_) + res_;
-  const long i0 = static_cast<long>(std::floor((pose.x - r) / res_));
-  const long i1 = static_cast<long>(std::floor((pose.x + r) / res_));
-  const long j0 = static_cast<long>(std::floor((pose.y - r) / res_));
-  const long j1 = static_cast<long>(std::floor((pose.y + r) / res_));
-  for (long i = i0; i <= i1; ++i)
-    for (long j = j0; j <= j1; ++j) {
-      const double dx = (i + 0.5) * res_ - pose.x, dy = (j + 0.5) * res_ - pose.y;
-      const double x = c * dx + s * dy, y = -s * dx + c * dy;
-      if (x >= front_ - 1e-9 && x <= x1 + 1e-9 && std::abs(y) <= half_width_ + 1e-9)
-        stood_.insert(key(i, j));
-    }
+  forCellsAround(pose, r, [&](long i, long j, double x, double y) {
+    if (x >= front_ - 1e-9 && x <= x1 + 1e-9 && std::abs(y) <= half_width_ + 1e-9)
+      stood_.insert(key(i, j));
+  });
 }
 
 double UnknownAhead::reach(double v) const {

@@ -57,6 +57,10 @@ class UnknownAhead {
   static int64_t key(long i, long j) { return (static_cast<int64_t>(i) << 32) ^ (j & 0xffffffff); }
   bool inFootprint(double x, double y) const;
   void startStrip(const mrpt::math::TPose2D& pose);
+  /** f(i, j, x, y) for the grid cells (i, j) within the square of half-side
+   *  r around `pose`, with (x, y) their centres in the robot's frame. */
+  template <class F>
+  void forCellsAround(const mrpt::math::TPose2D& pose, double r, F&& f) const;
 
   RobotParams robot_;
   UnknownAheadParams p_;
