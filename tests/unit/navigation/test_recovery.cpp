@@ -25,6 +25,15 @@ RobotParams fastRobot() {
   return r;
 }
 
+/** fastRobot() at the walker's limits (vmax 0.5: 1.57 rad/s) or its own
+ *  (vmax above 1 m/s: 4 rad/s). */
+RobotParams fastRobotAt(double vmax) {
+  RobotParams r = fastRobot();
+  r.v_max = vmax;
+  r.w_max = vmax > 1 ? 4.0 : 1.57;
+  return r;
+}
+
 /** Obstacle points every 2 cm from a to b. */
 void segment(std::vector<TPoint2D>& out, TPoint2D a, TPoint2D b) {
   const double l = std::hypot(b.x - a.x, b.y - a.y);
@@ -228,9 +237,7 @@ TEST(PlannerSupervisor, GoalDwaNeverProposesWhatTheSupervisorWouldStopOverRandom
   // passes unchanged (same footprint, braking model and safe distance).
   for (const double vmax : {0.5, 2.0}) {
     NavigationParams nav;
-    RobotParams r = fastRobot();
-    r.v_max = vmax;
-    r.w_max = vmax > 1 ? 4.0 : 1.57;
+    const RobotParams r = fastRobotAt(vmax);
     auto planner = makeGoalDwa(nav, r);
     const SafetySupervisor sup(nav, r);
     std::mt19937 rng(17);
@@ -400,9 +407,7 @@ TEST(PlannerSupervisor, FromTheMeasuredVelocityGoalDwaAndTheSupervisorNeverDisag
   // or slows some of what an instant-velocity goal-dwa proposes.
   for (const double vmax : {0.5, 2.0}) {
     NavigationParams nav;
-    RobotParams r = fastRobot();
-    r.v_max = vmax;
-    r.w_max = vmax > 1 ? 4.0 : 1.57;
+    const RobotParams r = fastRobotAt(vmax);
     auto planner = makeGoalDwa(nav, r);
     const SafetySupervisor sup(nav, r);
     std::mt19937 rng(23);
