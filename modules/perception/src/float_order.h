@@ -7,12 +7,13 @@
 #include <cstdint>
 #include <cstring>
 
-/** Marks a loop-heavy function to be compiled twice, for AVX2 and for the baseline x86-64,
- *  the loader choosing by the CPU (GCC / Clang function multi-versioning on x86-64 Linux).
- *  Without FMA: each element gets the same operations, hence the same result, in both. */
+/** Marks a loop-heavy function to be compiled three times, for AVX-512F (16 floats a
+ *  vector), AVX2 (8) and the baseline x86-64, the loader choosing by the CPU (GCC / Clang
+ *  function multi-versioning on x86-64 Linux). Neither target enables FMA: each element gets
+ *  the same operations, hence the same result, in all three. */
 #if defined(__x86_64__) && defined(__linux__) && defined(__has_attribute) && !defined(__AVX2__)
 #if __has_attribute(target_clones)
-#define CARENAV_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#define CARENAV_VECTOR_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 #endif
 #endif
 #ifndef CARENAV_VECTOR_CLONES

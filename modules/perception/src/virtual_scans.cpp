@@ -209,7 +209,9 @@ bool chunkMinimum(const Chunk& ch, size_t m, size_t i0, size_t n, double* best2,
       cur2 = best2[b];
       cur_i = best[b];
     }
-    if (ch.r2[j] < cur2) cur2 = ch.r2[j], cur_i = static_cast<long>(i0 + j);
+    const bool nearer = ch.r2[j] < cur2;  // selects, not a branch: which point wins is data
+    cur_i = nearer ? static_cast<long>(i0 + j) : cur_i;
+    cur2 = nearer ? ch.r2[j] : cur2;
   }
   if (cur >= 0) best2[cur] = cur2, best[cur] = cur_i;
   return true;
