@@ -1,5 +1,7 @@
 #include <carenav/perception/elevation_grid.h>
 
+#include "float_order.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -30,6 +32,51 @@ void ElevationGrid::clear() {
   valid_ = outliers_ = 0;
 }
 
+namespace {
+constexpr size_t kChunk = 256;
+constexpr int32_t kInvalid = -1;  ///< not a valid point (NaN, inf, |v| >= 1e6, the origin)
+constexpr int32_t kOutside = -2;  ///< valid, but outside the z band or the grid
+
+/** The grid's cell index per point of pts[0, m) (kInvalid, kOutside), with the arithmetic of
+ *  one point at a time: fi = x / r + m / 2 as one multiply-add in float, the same for y, in
+ *  the grid when 0 <= fi < m. Returns the valid points. Compiled as vector clones: every
+ *  point gets the same operations (no FMA), so the cells are those of the scalar loop. */
+CARENAV_VECTOR_CLONES size_t chunkCells(const Point3f* pts, size_t m, float inv, float off,
+                                        float mf, float zlo, float zhi, int32_t cells,
+                                        int32_t* cell) {
+  size_t valid = 0;
+  for (size_t k = 0; k < m; ++k) {
+    const float x = pts[k].x, y = pts[k].y, z = pts[k].z;
+    // NaN/inf fail every comparison; zero depth is the exact origin.
+    const bool finite = (std::abs(x) < 1e6f) & (std::abs(y) < 1e6f) & (std::abs(z) < 1e6f);
+    const bool ok = finite & !((x == 0.f) & (y == 0.f) & (z == 0.f));
+    const float fi = x * inv + off, fj = y * inv + off;
+    const bool in = (z >= zlo) & (z <= zhi) & (fi >= 0.f) & (fi < mf) & (fj >= 0.f) & (fj < mf);
+    // Clamped before the conversion (NaN to 0): only cells in the grid are kept anyway.
+    const int32_t i = static_cast<int32_t>(std::min(mf - 1.f, std::max(0.f, fi)));
+    const int32_t j = static_cast<int32_t>(std::min(mf - 1.f, std::max(0.f, fj)));
+    const int32_t c = in ? i * cells + j : kOutside;
+    cell[k] = ok ? c : kInvalid;
+    valid += ok;
+  }
+  return valid;
+}
+}  // namespace
+
+void ElevationGrid::Acc::add(float z, bool first) {
+  if (first) {
+    lo = hi = ref = z;
+    s = ss = 0;
+  } else {
+    lo = std::min(lo, z);
+    hi = std::max(hi, z);
+  }
+  ++n;
+  const double d = static_cast<double>(z - ref);
+  s += d;
+  ss += d * d;
+}
+
 size_t ElevationGrid::build(const Cloud& c, double z_min, double z_max, double outlier_sigma) {
   clear();
   const size_t np = c.points.size();
@@ -42,31 +89,19 @@ size_t ElevationGrid::build(const Cloud& c, double z_min, double z_max, double o
   Acc* acc = acc_.data();
   size_t used = 0, valid = 0;
   PointCell* pc = point_cell_.data();
-  for (size_t k = 0; k < np; ++k) {
-    const Point3f& p = pts[k];
-    // NaN/inf fail every comparison; zero depth is the exact origin.
-    if (!(std::abs(p.x) < 1e6f && std::abs(p.y) < 1e6f && std::abs(p.z) < 1e6f) ||
-        (p.x == 0.f && p.y == 0.f && p.z == 0.f))
-      continue;
-    ++valid;
-    if (!(p.z >= zlo && p.z <= zhi)) continue;
-    const float fi = p.x * inv + off, fj = p.y * inv + off;
-    if (!(fi >= 0.f && fi < mf && fj >= 0.f && fj < mf)) continue;
-    const int32_t ci = static_cast<int32_t>(fi) * m_ + static_cast<int32_t>(fj);
-    pc[used++] = {ci, p.z};
-    Acc& a = acc[ci];
-    if (a.n == 0) {
-      touched_.push_back(ci);
-      a.lo = a.hi = a.ref = p.z;
-      a.s = a.ss = 0;
-    } else {
-      a.lo = std::min(a.lo, p.z);
-      a.hi = std::max(a.hi, p.z);
+  int32_t cell[kChunk];
+  for (size_t k0 = 0; k0 < np; k0 += kChunk) {
+    const size_t m = std::min(kChunk, np - k0);
+    valid += chunkCells(pts + k0, m, inv, off, mf, zlo, zhi, m_, cell);
+    for (size_t k = 0; k < m; ++k) {
+      const int32_t ci = cell[k];
+      if (ci < 0) continue;
+      const float z = pts[k0 + k].z;
+      pc[used++] = {ci, z};
+      Acc& a = acc[ci];
+      if (a.n == 0) touched_.push_back(ci);
+      a.add(z, a.n == 0);
     }
-    ++a.n;
-    const double d = static_cast<double>(p.z - a.ref);
-    a.s += d;
-    a.ss += d * d;
   }
   last_valid_ = valid;
   if (outlier_sigma > 0) {
@@ -101,17 +136,7 @@ size_t ElevationGrid::build(const Cloud& c, double z_min, double z_max, double o
         continue;
       }
       Acc& a = acc[ci];
-      if (a.n == 0) {
-        a.lo = a.hi = a.ref = z;
-        a.s = a.ss = 0;
-      } else {
-        a.lo = std::min(a.lo, z);
-        a.hi = std::max(a.hi, z);
-      }
-      ++a.n;
-      const double d = static_cast<double>(z - a.ref);
-      a.s += d;
-      a.ss += d * d;
+      a.add(z, a.n == 0);
     }
     used -= outliers_;
   }

@@ -62,11 +62,12 @@ class ElevationGrid {
   };
   std::vector<PointCell> point_cell_;  // the points used: cell and elevation
   std::vector<int32_t> touched_;       // cells with data, in first-touch order
-  struct Acc {
+  struct Acc {                         // 32 bytes: two per cache line
     uint32_t n = 0;
     float lo = 0, hi = 0;
-    double s = 0, ss = 0;  // sums of (z - ref) and (z - ref)^2 (ref: the first z, stability)
     float ref = 0;
+    double s = 0, ss = 0;  // sums of (z - ref) and (z - ref)^2 (ref: the first z, stability)
+    void add(float z, bool first);
   };
   std::vector<Acc> acc_;
   struct Band {
