@@ -3,6 +3,8 @@
 // cannot see into").
 #include <carenav/perception/ism.h>
 
+#include "float_order.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -14,8 +16,38 @@ namespace {
 struct Column {
   int f_row = -1, prev_row = -1;  // rows of the last floor point and the one before (-1: none)
   int gap = 0, lower = 0;         // invalid rows / lower returns since the last floor point
-  float level = 0;                // floor level over the plane, followed along the column
 };
+
+/** What a pixel is to its column's floor (classifyRow). */
+enum PixelClass : int8_t { kNoReturn = 0, kFloor = 1, kLowerReturn = 2, kAbove = 3 };
+
+/** The plane, the sensor origin and the rule-1 thresholds, as the per-row pass uses them. */
+struct RowRule {
+  double pa, pb, pc, pd;
+  double ox, oy, oz;
+  double dpth2, kv2;
+};
+
+/** Per pixel of one image row: its class against its column's followed floor level, and its
+ *  signed distance sd over that level (Plane::signedDistance minus the level). Floor: sd^2
+ *  within max(d_pth, noise_k sigma_v)^2 (the squared rule-1 threshold, no sqrt); else lower
+ *  (sd < 0) or above. The arithmetic of one pixel at a time, in double, as vector clones (no
+ *  FMA): the classes are those of the per-pixel test. */
+CARENAV_VECTOR_CLONES void classifyRow(const Point3f* row, size_t w, const float* level,
+                                       const RowRule& r, double* sd, int8_t* cls) {
+  for (size_t u = 0; u < w; ++u) {
+    const float x = row[u].x, y = row[u].y, z = row[u].z;
+    const bool valid = (std::abs(x) < 1e6f) & (std::abs(y) < 1e6f) & (std::abs(z) < 1e6f) &
+                       !((x == 0.f) & (y == 0.f) & (z == 0.f));
+    const double d = r.pa * x + r.pb * y + r.pc * z + r.pd - level[u], d2 = d * d;
+    const double dx = x - r.ox, dy = y - r.oy, dz = z - r.oz;
+    const double t2 = std::max(r.dpth2, r.kv2 * (dx * dx + dy * dy + dz * dz) * dz * dz);
+    const int8_t c =
+        (d2 <= r.dpth2) | (d2 <= t2) ? int8_t{kFloor} : int8_t{d < 0 ? kLowerReturn : kAbove};
+    cls[u] = valid ? c : int8_t{kNoReturn};
+    sd[u] = d;
+  }
+}
 
 struct ColumnScan {
   const Cloud& c;
@@ -25,16 +57,10 @@ struct ColumnScan {
   LocalOccupancy& grid;
   double so;  // sensor height over the plane
   size_t edges = 0;
-  // Loop invariants in registers (the per-pixel step reads nothing else).
-  double pa = plane.a, pb = plane.b, pc = plane.c, pd = plane.d;
-  double ox = o.x, oy = o.y, oz = o.z;
-  double dpth2 = p.d_pth * p.d_pth;
-  double kv = p.noise_k * p.depth_noise_std, kv2 = kv * kv;
 
-  /** Squared rule-1 threshold at q: max(d_pth, noise_k sigma_v)^2 (no sqrt). */
-  double thr2(const Point3f& q) const {
-    const double dx = q.x - ox, dy = q.y - oy, dz = q.z - oz;
-    return std::max(dpth2, kv2 * (dx * dx + dy * dy + dz * dz) * dz * dz);
+  RowRule rule() const {
+    const double kv = p.noise_k * p.depth_noise_std;
+    return {plane.a, plane.b, plane.c, plane.d, o.x, o.y, o.z, p.d_pth * p.d_pth, kv * kv};
   }
   /** Depression of the ray o -> q below the plane, rad. */
   double depression(const Point3f& q) const {
@@ -69,7 +95,7 @@ struct ColumnScan {
     }
     ++edges;
   }
-  void step(Column& k, const Point3f& q, size_t u, int v);
+  void step(Column& k, float& level, int8_t cls, double sd, size_t u, int v);
   void finish(Column& k, size_t u);
   const Point3f& at(int v, size_t u) const {
     return c.points[static_cast<size_t>(v) * c.width + u];
@@ -92,23 +118,24 @@ void ColumnScan::finish(Column& k, size_t u) {
     mark(at(k.f_row, u));
 }
 
-void ColumnScan::step(Column& k, const Point3f& q, size_t u, int v) {
-  if (!validPoint(q)) {
-    k.gap += k.f_row >= 0;
-    return;
-  }
-  // Plane::signedDistance, with the coefficients held here.
-  const double sd = pa * q.x + pb * q.y + pc * q.z + pd - k.level, sd2 = sd * sd;
-  if (sd2 <= dpth2 || sd2 <= thr2(q)) {
-    finish(k, u);
-    k.prev_row = k.f_row;
-    k.f_row = v;
-    k.gap = k.lower = 0;
-    k.level += kFollow * static_cast<float>(sd);
-  } else if (sd < 0) {
-    if (k.f_row >= 0 && ++k.lower == kLower) mark(at(k.f_row, u));
-  } else {
-    k = Column{};  // above the floor: an obstacle (its shadow is no drop)
+void ColumnScan::step(Column& k, float& level, int8_t cls, double sd, size_t u, int v) {
+  switch (cls) {
+    case kNoReturn:
+      k.gap += k.f_row >= 0;
+      return;
+    case kFloor:
+      finish(k, u);
+      k.prev_row = k.f_row;
+      k.f_row = v;
+      k.gap = k.lower = 0;
+      level += kFollow * static_cast<float>(sd);
+      return;
+    case kLowerReturn:
+      if (k.f_row >= 0 && ++k.lower == kLower) mark(at(k.f_row, u));
+      return;
+    default:
+      k = Column{};  // above the floor: an obstacle (its shadow is no drop)
+      level = 0;
   }
 }
 
@@ -124,15 +151,22 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
   // Row by row from the bottom (memory order), one state per column. Every
   // column: stepping over some (two per cell at depth_max) let a curb of the
   // randomised benchmark through.
-  thread_local std::vector<Column> cols;
-  cols.assign(c.width, Column{});
-  Column* col = cols.data();
+  // Each row is classified in one vector pass, then the columns' states step.
   const size_t w = c.width;
+  thread_local std::vector<Column> cols;
+  thread_local std::vector<float> level;  // floor level over the plane, followed per column
+  thread_local std::vector<double> sd;
+  thread_local std::vector<int8_t> cls;
+  cols.assign(w, Column{});
+  level.assign(w, 0.f);
+  sd.resize(w);
+  cls.resize(w);
+  const RowRule rule = s.rule();
   for (size_t v = c.height; v-- > 0;) {
-    const Point3f* row = c.points.data() + v * w;
-    for (size_t u = 0; u < w; ++u) s.step(col[u], row[u], u, static_cast<int>(v));
+    classifyRow(c.points.data() + v * w, w, level.data(), rule, sd.data(), cls.data());
+    for (size_t u = 0; u < w; ++u) s.step(cols[u], level[u], cls[u], sd[u], u, static_cast<int>(v));
   }
-  for (size_t u = 0; u < w; ++u) s.finish(col[u], u);
+  for (size_t u = 0; u < w; ++u) s.finish(cols[u], u);
   return s.edges;
 }
 
