@@ -329,6 +329,31 @@ int bearingBin(double x, double y) {
   return std::clamp(b, 0, kEdgeBins - 1);
 }
 
+/** Per voxel of the robot-centred grid (fixed for its size and resolution, kept per thread):
+ *  its bearing bin and its centre's distance to the robot, std::hypot. */
+struct VoxelPolar {
+  std::vector<int16_t> bin;
+  std::vector<double> dist;
+};
+const VoxelPolar& voxelPolar(const ElevationGrid& g) {
+  const int m = g.cells();
+  thread_local VoxelPolar vp;
+  thread_local int vp_m = -1;
+  thread_local double vp_r = -1;
+  if (vp_m != m || vp_r != g.resolution()) {
+    vp.bin.resize(static_cast<size_t>(m) * m);
+    vp.dist.resize(vp.bin.size());
+    for (int32_t k = 0; k < m * m; ++k) {
+      const double x = g.centre(k / m), y = g.centre(k % m);
+      vp.bin[k] = static_cast<int16_t>(bearingBin(x, y));
+      vp.dist[k] = std::hypot(x, y);
+    }
+    vp_m = m;
+    vp_r = g.resolution();
+  }
+  return vp;
+}
+
 /** Occlusion is not free space: per 1 deg bearing bin, the distance of the
  *  nearest voxel holding points in this frame (the near edge of the view),
  *  the least over the bin and its two neighbours. A cell without points
@@ -341,11 +366,11 @@ const std::vector<float>& viewEdge(const ElevationGrid& g, const std::vector<Vox
   const int m = g.cells();
   thread_local std::vector<float> edge, edge_raw;
   edge_raw.assign(kEdgeBins, std::numeric_limits<float>::infinity());
+  const VoxelPolar& vp = voxelPolar(g);
   for (int32_t k = 0; k < m * m; ++k) {
     if (classes[k] == VoxelClass::None) continue;
-    const double x = g.centre(k / m), y = g.centre(k % m);
-    float& e = edge_raw[bearingBin(x, y)];
-    e = std::min(e, static_cast<float>(std::hypot(x, y)));
+    float& e = edge_raw[vp.bin[k]];
+    e = std::min(e, static_cast<float>(vp.dist[k]));
   }
   edge.resize(kEdgeBins);
   for (int b = 0; b < kEdgeBins; ++b)
@@ -362,6 +387,7 @@ struct IsmFrame {
   LocalOccupancy& grid;
   const IsmTables& lut;
   const std::vector<float>& edge;
+  const VoxelPolar& polar;
   double area, two_s2;
   double ca, sa, rx, ry;  // robot pose in the odometry frame
   float kg;
@@ -389,11 +415,11 @@ void integrateVoxel(const IsmFrame& f, int32_t k) {
   const auto& sigm = f.lut.sigm;
   // Voxel in the odometry frame; |c_v| its distance to the robot.
   const double wx = f.rx + f.ca * x - f.sa * y, wy = f.ry + f.sa * x + f.ca * y;
-  const double cv = std::hypot(x, y);
+  const double cv = f.polar.dist[k];
   const int vi = grid.cellX(wx), vj = grid.cellY(wy);
   // |c| in [0, |c_v|], [Garrote17, Eq. 5], from the voxel back to the robot.
   int sat = 0;
-  const double near_edge = f.edge[bearingBin(x, y)] + g.resolution();
+  const double near_edge = f.edge[f.polar.bin[k]] + g.resolution();
   grid.walkSegment(wx, wy, cv, 0.0, [&](int ci, int cj, double dc) {
     const bool at_voxel = ci == vi && cj == vj;
     const double D = at_voxel ? 0.0 : std::min(0.0, dc - cv);
@@ -448,6 +474,7 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
                        grid,
                        lut,
                        viewEdge(g, classes),
+                       voxelPolar(g),
                        g.resolution() * g.resolution(),
                        two_s2,
                        std::cos(grid.robot().phi()),
