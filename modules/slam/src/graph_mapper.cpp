@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 
 namespace carenav::slam {
 
@@ -474,6 +475,27 @@ class GraphMapper : public Mapper {
                       std::max(s.loop_search_radius, s.loop_search_max));
   }
 
+  /** What a loop closure with keyframe j is matched against: the points of
+   *  keyframes [from, j + kLoopNeighbours] in j's frame (for ICP) and their
+   *  lines (for the point-to-line refinement), with their search trees.
+   *  Consecutive keyframes along an old path try the same j's: each is built
+   *  once and kept until an optimisation moves the keyframes. */
+  struct LoopReference {
+    CSimplePointsMap points;
+    LineIcp line{LineIcp::Parameters{}};
+  };
+  const LoopReference& loopReference(size_t j, size_t from) {
+    constexpr size_t kMaxCached = 64;
+    auto it = loop_refs_.find(j);
+    if (it != loop_refs_.end()) return *it->second;
+    if (loop_refs_.size() >= kMaxCached) loop_refs_.clear();
+    auto ref = std::make_unique<LoopReference>();
+    ref->points = pointsAround(j, from, j + kLoopNeighbours);
+    LineSet lines = linesAround(keyframes_[j].pose, from, j + kLoopNeighbours);
+    ref->line.setReference(lines.points, std::move(lines.lines));
+    return *loop_refs_.emplace(j, std::move(ref)).first->second;
+  }
+
   bool tryLoopClosures(size_t k) {
     const auto& s = cfg_.slam;
     const double radius = loopSearchRadius();
@@ -492,18 +514,15 @@ class GraphMapper : public Mapper {
     for (const auto& [dist, j] : cands) {
       ++stats_.loop_candidates;
       const size_t from = j >= kLoopNeighbours ? j - kLoopNeighbours : 0;
-      const CSimplePointsMap ref = pointsAround(j, from, j + kLoopNeighbours);
+      const LoopReference& ref = loopReference(j, from);
       const CPose2D guess = keyframes_[k].pose - keyframes_[j].pose;
       mrpt::slam::CICP::TReturnInfo info;
-      auto pdf = loop_icp.Align(&ref, keyframes_[k].points.get(), guess, info);
+      auto pdf = loop_icp.Align(&ref.points, keyframes_[k].points.get(), guess, info);
       CPose2D rel = pdf->getMeanVal();
       if (info.goodness < s.min_icp_goodness) continue;
       // Point-to-point ICP found the basin from the drifted guess; point to
       // line pins it down without the pull along walls sampled differently.
-      LineIcp line{LineIcp::Parameters{}};
-      LineSet lref = linesAround(keyframes_[j].pose, from, j + kLoopNeighbours);
-      line.setReference(lref.points, std::move(lref.lines));
-      const LineIcp::Result refined = line.align(*keyframes_[k].points, rel);
+      const LineIcp::Result refined = ref.line.align(*keyframes_[k].points, rel);
       if ((refined.pose - rel).norm() < 0.2 && refined.inliers >= 0.3) rel = refined.pose;
       if ((rel - guess).norm() > std::max(s.loop_max_correction, radius)) continue;
       // ICP's goodness counts the scan's points that found a partner; a
@@ -692,6 +711,7 @@ class GraphMapper : public Mapper {
     stats_.loop_rejected += r.rejected.size();
     const CPose2D last_before = keyframes_.back().pose;
     for (size_t i = 0; i < keyframes_.size(); ++i) keyframes_[i].pose = graph_.nodes[i];
+    loop_refs_.clear();
     // The robot moves with its last keyframe.
     pose_ = keyframes_.back().pose + (pose_ - last_before);
   }
@@ -716,6 +736,7 @@ class GraphMapper : public Mapper {
     }
     const CPose2D last_before = keyframes_.back().pose;
     for (size_t i = 0; i < keyframes_.size(); ++i) keyframes_[i].pose = graph_.nodes[i];
+    loop_refs_.clear();
     // The robot moves with its last keyframe.
     pose_ = keyframes_.back().pose + (pose_ - last_before);
   }
@@ -797,6 +818,7 @@ class GraphMapper : public Mapper {
   std::shared_ptr<CSimplePointsMap> current_points_;
   mrpt::obs::CObservation2DRangeScan::Ptr current_scan_;
   std::vector<std::pair<size_t, size_t>> loop_edges_;
+  std::map<size_t, std::unique_ptr<LoopReference>> loop_refs_;  // by keyframe j (loopReference)
   OdometryChain chain_;                // keyframe to keyframe, as first matched
   PoseGaussian drift_;                 // the chain since the last loop closure
   std::vector<Candidate> candidates_;  // closures of the last keyframes
