@@ -105,6 +105,8 @@ class MrptPtg final : public LocalPlanner {
       throw InputError("mrpt-ptg: [robot] v_max and w_max must be positive");
     if (!(q.secure_end > q.secure_start))
       throw InputError("[nav.mrpt_ptg] secure_end must be larger than secure_start");
+    if (q.holonomic == "full-eval" && !q.evaluate_clearance)
+      throw InputError("[nav.mrpt_ptg] evaluate_clearance = false needs holonomic = nd");
     const bool c = q.ptgs == "c" || q.ptgs == "c+alpha";
     const bool alpha = q.ptgs == "alpha" || q.ptgs == "c+alpha";
     if (!c && !alpha) throw InputError("[nav.mrpt_ptg] ptgs: unknown value '" + q.ptgs + "'");
@@ -126,7 +128,8 @@ class MrptPtg final : public LocalPlanner {
     const TPoint2D last = path.back();
     if (in.goal && route->to_end < p_.goal_tolerance) return alignAtGoal(in);
 
-    const TPoint2D target = lookaheadPoint(path, in.pose.x, in.pose.y, q_.lookahead);
+    const double corner = q_.corner_deg > 0 ? mrpt::DEG2RAD(q_.corner_deg) : M_PI;
+    const TPoint2D target = lookaheadPoint(path, in.pose.x, in.pose.y, q_.lookahead, corner);
     const double c = std::cos(in.pose.phi), s = std::sin(in.pose.phi);
     const double tdx = target.x - in.pose.x, tdy = target.y - in.pose.y;
     Aim aim;

@@ -41,7 +41,9 @@ struct MrptPtgParams {
   double shape_margin = 0.05;
   double cte_a0_deg = 45;               ///< deg, alpha PTG: width of its velocity profiles
   std::string holonomic = "full-eval";  ///< TP-space method: full-eval (CHolonomicFullEval) | nd
-  bool evaluate_clearance = true;       ///< feed the clearance diagram to the holonomic method
+  /** Feed the clearance diagram to the holonomic method; full-eval needs it
+   *  (false is only valid with nd). */
+  bool evaluate_clearance = true;
   /** Normalised free distance [0, 1] along the chosen path at and below
    *  which the speed is 0, and above secure_end at which it is full (a
    *  ramp in between, as CAbstractPTGBasedReactive's secure distance). */
@@ -51,6 +53,11 @@ struct MrptPtgParams {
    *  nearer); farther than [navigation] lookahead, so that the holonomic
    *  method sees an obstacle on the route while there is room to avoid it. */
   double lookahead = 2.5;
+  /** deg, the target stops at a route vertex turning more than this until
+   *  the robot is near it (lookaheadPoint): the approach point of a narrow
+   *  passage is such a vertex, so a door is entered on its axis instead of
+   *  aimed at from the side (0: the target cuts every corner). */
+  double corner_deg = 10;
   double goal_turn_gain = 1.5;  ///< 1/s, w = gain * heading error when turning at the goal
   static const ParamTable<MrptPtgParams>& table();
 };
