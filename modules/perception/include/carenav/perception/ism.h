@@ -78,9 +78,13 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
  *  than max_slope_deg, and by more than noise_k standard errors of that
  *  slope, makes it an obstacle, whatever rules 1-3 and 5 said. Windows with
  *  residuals beyond the noise (a step inside) and voxels within noise_k depth
- *  sigmas of depth_max are not judged. Returns the voxels changed. */
+ *  sigmas of depth_max are not judged. `decided` (optional, one per cell,
+ *  rule 6): 2 (a steep region) is not judged, 1 (a gentle region) only
+ *  when steeper than max_slope_deg by noise_k standard errors (an edge the
+ *  region's plane smooths over). Returns the voxels changed. */
 size_t markSteepGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                       const Point3f* sensor_origin, std::vector<VoxelClass>& classes);
+                       const Point3f* sensor_origin, std::vector<VoxelClass>& classes,
+                       const std::vector<uint8_t>* decided = nullptr);
 
 /** Rule 5, gentle ground: breadth first from the ground voxels, an obstacle
  *  voxel (N_z >= d_min) becomes ground when the least-squares plane over
