@@ -31,8 +31,11 @@ SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const 
  *  max_slope_deg (its ground voxels become obstacles), gentle otherwise.
  *  Gentle regions reached from the floor's region through borders without
  *  a step get their obstacle voxels that pass rules 1-2 against the
- *  region's own plane back as ground. `decided` (one per cell) is set to 1
- *  (gentle) or 2 (steep) on the voxels of the judged regions. `thr` and
+ *  region's own plane back as ground. `decided` (one per cell) is set to 2
+ *  on the voxels of steep regions and to 1 on those of gentle regions
+ *  farther from the region's border than a max_slope_deg kink stays in the
+ *  growth band (nearer ones keep rule 4's window: the first cells of a
+ *  steep ramp may have joined the floor's region). `thr` and
  *  `se`: per cell the rule-1 threshold and the standard error of the mean. */
 struct RegionCounts {
   size_t steep = 0, rescued = 0;

@@ -56,6 +56,12 @@ struct RegionCells {
   std::vector<int32_t> label, inner;
 };
 
+/** How far (cells) a kink of max_slope_deg stays within noise_k sqrt(var)
+ *  of a region's plane past the region's border. */
+double kinkCells(const ElevationGrid& g, const PerceptionParams& p, double var) {
+  return p.noise_k * std::sqrt(var) / std::tan(p.max_slope_deg * M_PI / 180) / g.resolution();
+}
+
 void prepareCells(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
                   const std::vector<float>& thr, const std::vector<float>& se,
                   const std::vector<VoxelClass>& classes, RegionCells& cs) {
@@ -87,10 +93,9 @@ void prepareCells(const ElevationGrid& g, const PerceptionParams& p, const Point
     // its ray by the depth noise (sigma depth_noise_std r^2), so a kink at
     // the border (a ramp's foot) is smeared over trim_k of those; and a kink
     // of max_slope_deg stays within noise_k sqrt(var) of the region's plane
-    // for `kink` beyond it (the region grown first takes those cells).
-    const double kink = p.noise_k * std::sqrt(cs.var[k]) / std::tan(p.max_slope_deg * M_PI / 180);
-    cs.blur[k] =
-        static_cast<float>((p.region_trim_k * p.depth_noise_std * r * r + kink) / g.resolution());
+    // for kinkCells() beyond it (the region grown first takes those cells).
+    cs.blur[k] = static_cast<float>(p.region_trim_k * p.depth_noise_std * r * r / g.resolution() +
+                                    kinkCells(g, p, cs.var[k]));
   }
 }
 
@@ -416,7 +421,10 @@ void applyVerdicts(const ElevationGrid& g, const PerceptionParams& p, const Regi
   for (size_t q = 0; q < classes.size(); ++q) {
     const int32_t l = cs.label[q];
     if (l < 0 || !vd.v[l]) continue;
-    decided[q] = vd.v[l];
+    // A gentle region's plane holds away from its border: the cells within
+    // the distance a max_slope_deg kink stays in its growth band (a steep
+    // ramp's first cells taken by the floor's region) keep rule 4's window.
+    decided[q] = vd.v[l] == 1 && cs.inner[q] <= kinkCells(g, p, cs.var[q]) ? 0 : vd.v[l];
     if (vd.v[l] == 2 && classes[q] == VoxelClass::Ground) {
       classes[q] = VoxelClass::Obstacle;
       ++rc.steep;
