@@ -28,7 +28,10 @@ enum class VoxelClass : uint8_t { None = 0, Ground, Obstacle };
  *  3. traversable surfaces: an off-plane voxel flat within the rule-1
  *     threshold around its own mean and connected (4-neighbours, breadth
  *     first from the plane's ground voxels) through mean steps of at most
- *     tan(max_slope_deg) d_r + noise_k sigma_diff is ground (ramps).
+ *     tan(max_slope_deg) d_r + noise_k sigma_diff is ground (ramps);
+ *  then rule 5 (rescueGentleGround), rule 6 (ramps by region: smooth regions
+ *  judged by their own plane fit, src/slope_regions.cpp) and rule 4
+ *  (markSteepGround) on the voxels rule 6 left to it.
  *  `sensor_origin` null: no noise model (sigma_v = 0). */
 struct IsmStats {
   size_t voxels = 0, obstacle_voxels = 0, ground_voxels = 0;
