@@ -54,6 +54,7 @@ bool fitPlane(const PlaneSums& s, PlaneFit& f) {
 struct RegionCells {
   std::vector<float> z, var, blur;
   std::vector<int32_t> label, inner;
+  std::vector<uint8_t> far;  ///< judged but within noise_k depth sigmas of depth_max
 };
 
 /** How far (cells) a kink of max_slope_deg stays within noise_k sqrt(var)
@@ -73,6 +74,7 @@ void prepareCells(const ElevationGrid& g, const PerceptionParams& p, const Point
   cs.var.assign(mm, -1.f);
   cs.blur.resize(mm);
   cs.label.assign(mm, -1);
+  cs.far.assign(mm, 0);
   for (size_t k = 0; k < mm; ++k) {
     if (classes[k] == VoxelClass::None) continue;
     const int i = static_cast<int>(k / m), j = static_cast<int>(k % m);
@@ -86,7 +88,10 @@ void prepareCells(const ElevationGrid& g, const PerceptionParams& p, const Point
     // Not within noise_k depth sigmas of depth_max (biased means, rule 4).
     const double dx = g.centre(i) - o.x, dy = g.centre(j) - o.y, dz = c.mean - o.z;
     const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
-    if (r + p.noise_k * p.depth_noise_std * r * r > p.depth_max) continue;
+    if (r + p.noise_k * p.depth_noise_std * r * r > p.depth_max) {
+      cs.far[k] = 1;
+      continue;
+    }
     cs.z[k] = static_cast<float>(c.mean);
     cs.var[k] = static_cast<float>(static_cast<double>(se[k]) * se[k] + tol2);
     // Margin a region's slope fit keeps from its border: a sample moves along
@@ -406,6 +411,49 @@ std::vector<uint8_t> reachedRegions(const ElevationGrid& g, const RegionCells& c
   return reach;
 }
 
+/** Rules 1 and 2 pass for voxel q against the plane of region l. */
+bool onRegionPlane(const ElevationGrid& g, const PerceptionParams& p, const Verdicts& vd, int32_t l,
+                   size_t q, const std::vector<float>& thr, const std::vector<float>& se) {
+  const int m = g.cells(), i = static_cast<int>(q / m), j = static_cast<int>(q % m);
+  const ElevationCell& c = g.at(i, j);
+  const double zp = vd.at(g, l, i, j);
+  if (std::max(std::abs(c.z_hi - zp), std::abs(c.z_lo - zp)) > thr[q]) return false;
+  return p.mean_step <= 0 || std::abs(c.mean - zp) <= p.mean_step + p.noise_k * se[q];
+}
+
+/** The far end of reached regions: voxels near depth_max (no region takes
+ *  them: their means are biased) connected to a reached region other than
+ *  the floor's through such voxels, breadth first, take that region's plane;
+ *  an obstacle voxel that passes rules 1 and 2 against it becomes ground. */
+void extendToFarEnd(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
+                    const Verdicts& vd, const std::vector<uint8_t>& reach, int32_t floor_id,
+                    const std::vector<float>& thr, const std::vector<float>& se,
+                    std::vector<VoxelClass>& classes, RegionCounts& rc) {
+  const int m = g.cells();
+  thread_local std::vector<int32_t> from, queue;
+  from.assign(classes.size(), -1);
+  queue.clear();
+  for (size_t q = 0; q < classes.size(); ++q) {
+    const int32_t l = cs.label[q];
+    if (l >= 0 && l != floor_id && reach[l] && vd.v[l] == 1) from[q] = l, queue.push_back(q);
+  }
+  for (size_t h = 0; h < queue.size(); ++h) {
+    const int i = queue[h] / m, j = queue[h] % m;
+    const int nbs[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+    for (const auto& b : nbs) {
+      if (!g.inside(b[0], b[1])) continue;
+      const int32_t q = b[0] * m + b[1];
+      if (!cs.far[q] || from[q] >= 0) continue;
+      from[q] = from[queue[h]];
+      queue.push_back(q);
+      if (classes[q] == VoxelClass::Obstacle && onRegionPlane(g, p, vd, from[q], q, thr, se)) {
+        classes[q] = VoxelClass::Ground;
+        ++rc.rescued;
+      }
+    }
+  }
+}
+
 /** Applies the verdicts: the ground voxels of steep regions become
  *  obstacles; the obstacle voxels of reached regions (not the floor itself)
  *  become ground when rules 1 and 2 pass against the region's own plane
@@ -417,7 +465,6 @@ void applyVerdicts(const ElevationGrid& g, const PerceptionParams& p, const Regi
                    const std::vector<float>& thr, const std::vector<float>& se,
                    std::vector<VoxelClass>& classes, std::vector<uint8_t>& decided,
                    RegionCounts& rc) {
-  const int m = g.cells();
   for (size_t q = 0; q < classes.size(); ++q) {
     const int32_t l = cs.label[q];
     if (l < 0 || !vd.v[l]) continue;
@@ -431,11 +478,7 @@ void applyVerdicts(const ElevationGrid& g, const PerceptionParams& p, const Regi
       continue;
     }
     if (!reach[l] || l == floor_id || classes[q] != VoxelClass::Obstacle) continue;
-    const int i = static_cast<int>(q / m), j = static_cast<int>(q % m);
-    const ElevationCell& c = g.at(i, j);
-    const double zp = vd.at(g, l, i, j);
-    if (std::max(std::abs(c.z_hi - zp), std::abs(c.z_lo - zp)) > thr[q]) continue;
-    if (p.mean_step > 0 && std::abs(c.mean - zp) > p.mean_step + p.noise_k * se[q]) continue;
+    if (!onRegionPlane(g, p, vd, l, q, thr, se)) continue;
     classes[q] = VoxelClass::Ground;
     ++rc.rescued;
   }
@@ -515,6 +558,7 @@ RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p
   const int32_t floor_id = judgeAll(g, p, cs, rg, ref, vd);
   const std::vector<uint8_t> reach = reachedRegions(g, cs, vd, floor_id, p);
   applyVerdicts(g, p, cs, vd, reach, floor_id, thr, se, classes, decided, rc);
+  extendToFarEnd(g, p, cs, vd, reach, floor_id, thr, se, classes, rc);
   return rc;
 }
 
