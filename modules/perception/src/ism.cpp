@@ -1,5 +1,7 @@
 #include <carenav/perception/ism.h>
 
+#include "slope_reference.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -266,7 +268,17 @@ IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const Percep
   std::vector<int32_t> queue = applyPlaneRules(g, plane, p, o, classes, noise);
   if (p.max_slope_deg > 0) st.rescued_voxels = rescueSlopes(g, p, noise, classes, queue);
   if (p.max_slope_deg > 0) st.rescued_voxels += rescueGentleGround(g, plane, p, o, classes);
-  st.steep_voxels = markSteepGround(g, plane, p, o, classes);
+  // Rule 6: smooth regions judged by their own plane; rule 4's window on the rest.
+  thread_local std::vector<uint8_t> decided;
+  decided.assign(mm, 0);
+  if (o && p.depth_noise_std > 0 && p.max_slope_deg > 0 && std::abs(plane.c) >= 1e-6) {
+    const uint32_t min_n = static_cast<uint32_t>(std::max(1.0, p.d_min));
+    const SlopeReference ref = slopeReference(g, plane, p, classes, min_n);
+    const RegionCounts rc = judgeSlopeRegions(g, p, *o, ref, thr, se, classes, decided);
+    st.rescued_voxels += rc.rescued;
+    st.steep_voxels += rc.steep;
+  }
+  st.steep_voxels += markSteepGround(g, plane, p, o, classes, &decided);
   for (size_t k = 0; k < mm; ++k) {
     if (classes[k] == VoxelClass::None) continue;
     ++st.voxels;

@@ -105,6 +105,20 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
           .real("mean_k", &P::mean_k, "", 0, 20,
                 "ramp rule: differences of voxel means may exceed the max_slope rise by this "
                 "many standard errors (noise of the means)")
+          .integer("region_min_cells", &P::region_min_cells, "cells", 3, 1000000,
+                   "ramps by region: a connected region of voxel means that share one plane "
+                   "within the noise is judged by its own plane fit once it holds this many "
+                   "cells (smaller ones by the 7 x 7 window of the steep-ground rule)")
+          .real("region_tolerance", &P::region_tolerance, "m", 0, 1,
+                "ramps by region: a cell joins a region while its mean lies within noise_k "
+                "times sqrt(standard error^2 + this^2) of the region's plane (the model error "
+                "of a cell mean besides the depth noise)")
+          .real("region_trim_k", &P::region_trim_k, "", 0.5, 20,
+                "ramps by region: a region's slope is fitted to its cells farther from its "
+                "border than this many depth-noise sigmas (the noise smears a kink, a ramp's "
+                "foot, over that) plus the distance a max_slope_deg kink stays within the "
+                "growth band, refitted 3 times to the cells within this many standard errors "
+                "of the previous fit")
           .real("k_g", &P::k_g, "", 0, 0.5, "K_g: ground amplitude gain ([Garrote17, Table I])")
           .real("sigma2", &P::sigma2, "m^2", 1e-6, 10, "sigma^2: ISM Gaussian variance")
           .real("k_n", &P::k_n, "", 0, 10, "K_n: voxel density sample normalisation factor")

@@ -2,6 +2,8 @@
 // plane (docs/perceive.md "Noise-aware voxel rules", rule 4).
 #include <carenav/perception/ism.h>
 
+#include "slope_reference.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -115,13 +117,21 @@ bool steepWindow(const double w[Sums::kN], const SlopeTest& t) {
   return fitWindow(w, t, slope, se) && slope > t.tmax && slope > t.k * se;
 }
 
-/** The reference and thresholds of rules 4 and 5 for `plane`. */
+/** Rule 4 inside a gentle region (rule 6): the window steeper than tmax by
+ *  more than k standard errors of its slope (a local edge the region's
+ *  plane smooths over, e.g. a curb blurred by the noise). */
+bool steepBeyondDoubt(const double w[Sums::kN], const SlopeTest& t) {
+  double slope, se;
+  return fitWindow(w, t, slope, se) && slope - t.k * se > t.tmax;
+}
+
 /** Gradient (rise per cell along i and j) of the least-squares plane of the
  *  ground voxels nearest the robot: those within kNearDepth of the nearest
- *  one (the floor the robot stands on, as far as the camera sees it); false
- *  with fewer than kMinCells of them. */
+ *  one (the floor the robot stands on, as far as the camera sees it), and the
+ *  variance of that gradient (the sum over i and j, from the fit's
+ *  residuals); false with fewer than kMinCells of them. */
 bool nearFloorGradient(const ElevationGrid& g, const std::vector<VoxelClass>& classes,
-                       uint32_t min_n, double& gi, double& gj) {
+                       uint32_t min_n, double& gi, double& gj, double& var) {
   constexpr double kNearDepth = 0.75;  // m
   constexpr double kMinCells = 20;
   const int m = g.cells();
@@ -129,15 +139,15 @@ bool nearFloorGradient(const ElevationGrid& g, const std::vector<VoxelClass>& cl
   for (int i = 0; i < m; ++i)
     for (int j = 0; j < m; ++j)
       if (judged(g, classes, min_n, i, j)) d0 = std::min(d0, std::hypot(g.centre(i), g.centre(j)));
-  double w[Sums::kN] = {};
+  double w[10] = {};
   for (int i = 0; i < m; ++i)
     for (int j = 0; j < m; ++j) {
       if (!judged(g, classes, min_n, i, j) ||
           std::hypot(g.centre(i), g.centre(j)) > d0 + kNearDepth)
         continue;
       const double z = g.at(i, j).mean, a = i, b = j;
-      const double v[9] = {1, a, b, a * a, a * b, b * b, z, a * z, b * z};
-      for (int q = 0; q < 9; ++q) w[q] += v[q];
+      const double v[10] = {1, a, b, a * a, a * b, b * b, z, a * z, b * z, z * z};
+      for (int q = 0; q < 10; ++q) w[q] += v[q];
     }
   const double n = w[0];
   if (n < kMinCells) return false;
@@ -148,13 +158,15 @@ bool nearFloorGradient(const ElevationGrid& g, const std::vector<VoxelClass>& cl
   if (det <= 1e-9) return false;
   gi = (sjj * siz - sij * sjz) / det;
   gj = (sii * sjz - sij * siz) / det;
+  const double rss = std::max(0.0, (w[9] - w[6] * w[6] / n) - gi * siz - gj * sjz);
+  var = rss / (n - 3) * (sii + sjj) / det;
   return true;
 }
 
-SlopeTest slopeTest(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                    const std::vector<VoxelClass>& classes, uint32_t min_n) {
-  constexpr int kHalf = 3;          // window of 7 x 7 cells (35 cm at d_r = 5 cm)
-  constexpr double kMinFill = 0.5;  // share of the window holding judged voxels
+}  // namespace
+
+SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                              const std::vector<VoxelClass>& classes, uint32_t min_n) {
   // Slopes are measured against the floor the robot stands on: the ground
   // voxels nearest to it, else the plane, whichever is level within the
   // mounting's tilt uncertainty first (pitch and roll each off by up to
@@ -163,14 +175,26 @@ SlopeTest slopeTest(const ElevationGrid& g, const Plane& plane, const Perception
   // reference: the robot frame's level is.
   const double r = g.resolution();
   const double tol = std::tan(std::sqrt(2.0) * p.prior_tilt_deg * M_PI / 180) * r;
-  double gi = 0, gj = 0;
-  if (!nearFloorGradient(g, classes, min_n, gi, gj) || std::hypot(gi, gj) > tol) {
-    gi = -plane.a / plane.c * r, gj = -plane.b / plane.c * r;
-    if (std::hypot(gi, gj) > tol) gi = gj = 0;
-  }
-  return {gi,
-          gj,
-          std::tan(p.max_slope_deg * M_PI / 180.0) * r,
+  SlopeReference ref;
+  if (nearFloorGradient(g, classes, min_n, ref.gi, ref.gj, ref.var) &&
+      std::hypot(ref.gi, ref.gj) <= tol)
+    return ref;
+  ref.var = 0;
+  ref.gi = -plane.a / plane.c * r, ref.gj = -plane.b / plane.c * r;
+  if (std::hypot(ref.gi, ref.gj) > tol) ref.gi = ref.gj = 0;
+  return ref;
+}
+
+namespace {
+
+SlopeTest slopeTest(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                    const std::vector<VoxelClass>& classes, uint32_t min_n) {
+  constexpr int kHalf = 3;          // window of 7 x 7 cells (35 cm at d_r = 5 cm)
+  constexpr double kMinFill = 0.5;  // share of the window holding judged voxels
+  const SlopeReference ref = slopeReference(g, plane, p, classes, min_n);
+  return {ref.gi,
+          ref.gj,
+          std::tan(p.max_slope_deg * M_PI / 180.0) * g.resolution(),
           kMinFill * (2 * kHalf + 1) * (2 * kHalf + 1),
           p.noise_k,
           kHalf};
@@ -179,7 +203,8 @@ SlopeTest slopeTest(const ElevationGrid& g, const Plane& plane, const Perception
 }  // namespace
 
 size_t markSteepGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                       const Point3f* o, std::vector<VoxelClass>& classes) {
+                       const Point3f* o, std::vector<VoxelClass>& classes,
+                       const std::vector<uint8_t>* decided) {
   if (p.max_slope_deg <= 0 || std::abs(plane.c) < 1e-6) return 0;
   const uint32_t min_n = static_cast<uint32_t>(std::max(1.0, p.d_min));
   thread_local Sums s;
@@ -189,9 +214,12 @@ size_t markSteepGround(const ElevationGrid& g, const Plane& plane, const Percept
   for (int i = s.i0; i < s.i0 + s.mi; ++i)
     for (int j = s.j0; j < s.j0 + s.mj; ++j) {
       if (!judged(g, classes, min_n, i, j) || (o && nearRangeLimit(g, p, *o, i, j))) continue;
+      const uint8_t region = decided ? (*decided)[static_cast<size_t>(i) * g.cells() + j] : 0;
+      if (region == 2) continue;
       double w[Sums::kN];
       s.window(i - t.half, j - t.half, i + t.half + 1, j + t.half + 1, w);
-      if (steepWindow(w, t)) steep.push_back(i * g.cells() + j);
+      if (region == 1 ? steepBeyondDoubt(w, t) : steepWindow(w, t))
+        steep.push_back(i * g.cells() + j);
     }
   for (const int32_t k : steep) classes[k] = VoxelClass::Obstacle;
   return steep.size();

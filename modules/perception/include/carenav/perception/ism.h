@@ -28,7 +28,10 @@ enum class VoxelClass : uint8_t { None = 0, Ground, Obstacle };
  *  3. traversable surfaces: an off-plane voxel flat within the rule-1
  *     threshold around its own mean and connected (4-neighbours, breadth
  *     first from the plane's ground voxels) through mean steps of at most
- *     tan(max_slope_deg) d_r + noise_k sigma_diff is ground (ramps).
+ *     tan(max_slope_deg) d_r + noise_k sigma_diff is ground (ramps);
+ *  then rule 5 (rescueGentleGround), rule 6 (ramps by region: smooth regions
+ *  judged by their own plane fit, src/slope_regions.cpp) and rule 4
+ *  (markSteepGround) on the voxels rule 6 left to it.
  *  `sensor_origin` null: no noise model (sigma_v = 0). */
 struct IsmStats {
   size_t voxels = 0, obstacle_voxels = 0, ground_voxels = 0;
@@ -78,9 +81,13 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
  *  than max_slope_deg, and by more than noise_k standard errors of that
  *  slope, makes it an obstacle, whatever rules 1-3 and 5 said. Windows with
  *  residuals beyond the noise (a step inside) and voxels within noise_k depth
- *  sigmas of depth_max are not judged. Returns the voxels changed. */
+ *  sigmas of depth_max are not judged. `decided` (optional, one per cell,
+ *  rule 6): 2 (a steep region) is not judged, 1 (a gentle region) only
+ *  when steeper than max_slope_deg by noise_k standard errors (an edge the
+ *  region's plane smooths over). Returns the voxels changed. */
 size_t markSteepGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                       const Point3f* sensor_origin, std::vector<VoxelClass>& classes);
+                       const Point3f* sensor_origin, std::vector<VoxelClass>& classes,
+                       const std::vector<uint8_t>* decided = nullptr);
 
 /** Rule 5, gentle ground: breadth first from the ground voxels, an obstacle
  *  voxel (N_z >= d_min) becomes ground when the least-squares plane over

@@ -44,11 +44,16 @@ struct PerceptionParams {
   double mean_step = 0.012;    ///< m, a voxel mean this far (+ noise_k std errors) is an obstacle
   double max_slope_deg = 8;    ///< deg, steepest surface connected to the ground kept traversable
   double mean_k = 2;           ///< ramp rule: standard errors allowed on differences of voxel means
-  double k_g = 0.3;            ///< ground amplitude gain
-  double sigma2 = 0.02;        ///< m^2, Gaussian variance
-  double k_n = 0.0005;         ///< sample normalisation factor
-  double d_min = 3;            ///< minimum number of points
-  double k_m = 0.8;            ///< amplitude gain of the voxel density
+  // Ramps by region (docs/perceive.md "Noise-aware voxel rules", rule 6)
+  int region_min_cells = 50;        ///< a smooth region this large is judged as a whole (cells)
+  double region_tolerance = 0.003;  ///< m, model error of a cell mean against its region's plane
+  double region_trim_k =
+      2;                 ///< region slope fit: border margin (depth sigmas), inliers (std errors)
+  double k_g = 0.3;      ///< ground amplitude gain
+  double sigma2 = 0.02;  ///< m^2, Gaussian variance
+  double k_n = 0.0005;   ///< sample normalisation factor
+  double d_min = 3;      ///< minimum number of points
+  double k_m = 0.8;      ///< amplitude gain of the voxel density
   // Measured noise (docs/perceive.md "Noise measured per frame")
   /// each frame's measured depth noise raises depth_noise_std by at most this factor (1: off)
   double noise_adapt_max = 4;

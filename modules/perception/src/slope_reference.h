@@ -1,0 +1,50 @@
+// Internal to the steep-ground rules (slope_rule.cpp, slope_regions.cpp):
+// the floor slopes are measured against, and rule 6, ramps by region.
+#pragma once
+
+#include <carenav/perception/ism.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace carenav::perception {
+
+/** Gradient of the floor the robot stands on (rise per cell along i and j)
+ *  and its variance (sum over i and j; 0 when it is the plane or the level,
+ *  not a fit): see markSteepGround(). */
+struct SlopeReference {
+  double gi = 0, gj = 0, var = 0;
+};
+SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                              const std::vector<VoxelClass>& classes, uint32_t min_n);
+
+/** Rule 6, ramps by region (docs/perceive.md): the judged voxels (N_z >=
+ *  d_min, flat within the noise, not near depth_max) are grown, nearest the
+ *  robot first, into connected regions whose voxel means share one plane
+ *  within noise_k sqrt(se^2 + region_tolerance^2); border cells then move to
+ *  the neighbouring region whose plane fits them better. A region whose
+ *  slope fit (weighted, its cells away from its border, trimmed at
+ *  region_trim_k standard errors) holds at least region_min_cells cells is
+ *  judged: steep when its angle to the floor's plane (the first judged
+ *  region, nearest the robot, if level within the mounting's tilt
+ *  uncertainty, else `ref`) plus noise_k standard errors exceeds
+ *  max_slope_deg (its ground voxels become obstacles), gentle otherwise.
+ *  Gentle regions reached from the floor's region through borders without
+ *  a step get their obstacle voxels that pass rules 1-2 against the
+ *  region's own plane back as ground, and so do voxels near depth_max (no
+ *  region takes them) connected to such a region (not the floor's) through
+ *  voxels near depth_max, against its plane. `decided` (one per cell) is set to 2
+ *  on the voxels of steep regions and to 1 on those of gentle regions
+ *  farther from the region's border than a max_slope_deg kink stays in the
+ *  growth band (nearer ones keep rule 4's window: the first cells of a
+ *  steep ramp may have joined the floor's region). `thr` and
+ *  `se`: per cell the rule-1 threshold and the standard error of the mean. */
+struct RegionCounts {
+  size_t steep = 0, rescued = 0;
+};
+RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
+                               const SlopeReference& ref, const std::vector<float>& thr,
+                               const std::vector<float>& se, std::vector<VoxelClass>& classes,
+                               std::vector<uint8_t>& decided);
+
+}  // namespace carenav::perception

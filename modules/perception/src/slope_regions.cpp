@@ -1,0 +1,565 @@
+// Rule 6, ramps by region (docs/perceive.md "Noise-aware voxel rules"): the
+// slope of a whole smooth region of the elevation grid, with its standard
+// error, decides for every voxel of the region.
+#include "slope_reference.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+
+namespace carenav::perception {
+
+namespace {
+
+/** Weighted least-squares sums of z = c + gx x + gy y (x, y in m from the
+ *  region's seed; weight 1 / variance of the cell mean). */
+struct PlaneSums {
+  double w = 0, x = 0, y = 0, xx = 0, xy = 0, yy = 0, z = 0, xz = 0, yz = 0, zz = 0;
+  size_t n = 0;
+  void add(double wt, double a, double b, double c) {
+    w += wt, x += wt * a, y += wt * b, z += wt * c;
+    xx += wt * a * a, xy += wt * a * b, yy += wt * b * b;
+    xz += wt * a * c, yz += wt * b * c, zz += wt * c * c;
+    ++n;
+  }
+};
+
+/** A weighted plane fit: height at the origin, gradient (per m), the
+ *  gradient's variance (sum over x and y) and the chi-square of the fit. */
+struct PlaneFit {
+  double c = 0, gx = 0, gy = 0, var = 0, chi2 = 0;
+  double at(double a, double b) const { return c + gx * a + gy * b; }
+};
+
+bool fitPlane(const PlaneSums& s, PlaneFit& f) {
+  if (s.n < 3 || s.w <= 0) return false;
+  const double mx = s.x / s.w, my = s.y / s.w, mz = s.z / s.w;
+  const double sxx = s.xx - s.w * mx * mx, sxy = s.xy - s.w * mx * my, syy = s.yy - s.w * my * my;
+  const double sxz = s.xz - s.w * mx * mz, syz = s.yz - s.w * my * mz;
+  const double szz = s.zz - s.w * mz * mz;
+  const double det = sxx * syy - sxy * sxy;
+  if (!(det > 1e-6 * sxx * syy) || det <= 0) return false;  // cells in a line
+  f.gx = (syy * sxz - sxy * syz) / det;
+  f.gy = (sxx * syz - sxy * sxz) / det;
+  f.c = mz - f.gx * mx - f.gy * my;
+  f.chi2 = std::max(0.0, szz - f.gx * sxz - f.gy * syz);
+  f.var = (sxx + syy) / det;
+  return true;
+}
+
+/** Per cell of the grid: the mean, the variance a region allows it (< 0:
+ *  not judged), its region (-1: none), the margin (cells) a region's slope
+ *  fit keeps from its border there, and its distance (cells) to that border. */
+struct RegionCells {
+  std::vector<float> z, var, blur;
+  std::vector<int32_t> label, inner;
+  std::vector<uint8_t> far;  ///< judged but within noise_k depth sigmas of depth_max
+};
+
+/** How far (cells) a kink of max_slope_deg stays within noise_k sqrt(var)
+ *  of a region's plane past the region's border. */
+double kinkCells(const ElevationGrid& g, const PerceptionParams& p, double var) {
+  return p.noise_k * std::sqrt(var) / std::tan(p.max_slope_deg * M_PI / 180) / g.resolution();
+}
+
+void prepareCells(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
+                  const std::vector<float>& thr, const std::vector<float>& se,
+                  const std::vector<VoxelClass>& classes, RegionCells& cs) {
+  const int m = g.cells();
+  const size_t mm = static_cast<size_t>(m) * m;
+  const uint32_t min_n = static_cast<uint32_t>(std::max(1.0, p.d_min));
+  const double tol2 = p.region_tolerance * p.region_tolerance;
+  cs.z.resize(mm);
+  cs.var.assign(mm, -1.f);
+  cs.blur.resize(mm);
+  cs.label.assign(mm, -1);
+  cs.far.assign(mm, 0);
+  for (size_t k = 0; k < mm; ++k) {
+    if (classes[k] == VoxelClass::None) continue;
+    const int i = static_cast<int>(k / m), j = static_cast<int>(k % m);
+    const ElevationCell& c = g.at(i, j);
+    if (c.n < min_n) continue;
+    // Flat within the noise (no step inside, as rule 3): z+ and z- within
+    // the rule-1 band, widened by one sigma_v, around the cell's mean.
+    const double sv = se[k] * std::sqrt(static_cast<double>(c.n));
+    const double flat = thr[k] + sv;
+    if (c.z_hi - c.mean > flat || c.mean - c.z_lo > flat) continue;
+    // Not within noise_k depth sigmas of depth_max (biased means, rule 4).
+    const double dx = g.centre(i) - o.x, dy = g.centre(j) - o.y, dz = c.mean - o.z;
+    const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (r + p.noise_k * p.depth_noise_std * r * r > p.depth_max) {
+      cs.far[k] = 1;
+      continue;
+    }
+    cs.z[k] = static_cast<float>(c.mean);
+    cs.var[k] = static_cast<float>(static_cast<double>(se[k]) * se[k] + tol2);
+    // Margin a region's slope fit keeps from its border: a sample moves along
+    // its ray by the depth noise (sigma depth_noise_std r^2), so a kink at
+    // the border (a ramp's foot) is smeared over trim_k of those; and a kink
+    // of max_slope_deg stays within noise_k sqrt(var) of the region's plane
+    // for kinkCells() beyond it (the region grown first takes those cells).
+    cs.blur[k] = static_cast<float>(p.region_trim_k * p.depth_noise_std * r * r / g.resolution() +
+                                    kinkCells(g, p, cs.var[k]));
+  }
+}
+
+/** The cells of an m x m grid nearest the robot (its centre) first. */
+const std::vector<int32_t>& nearestFirst(const ElevationGrid& g) {
+  thread_local std::vector<int32_t> order;
+  const int m = g.cells();
+  if (order.size() != static_cast<size_t>(m) * m) {
+    order.resize(static_cast<size_t>(m) * m);
+    for (int32_t k = 0; k < m * m; ++k) order[k] = k;
+    auto d2 = [&](int32_t k) { return std::hypot(k / m - (m - 1) / 2.0, k % m - (m - 1) / 2.0); };
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int32_t a, int32_t b) { return d2(a) < d2(b); });
+  }
+  return order;
+}
+
+/** Plane of the unlabelled judged cells of the 7 x 7 window around the seed
+ *  (x, y from the seed), when it holds at least half the window and its
+ *  residuals are of the noise's size. */
+bool seedPlane(const ElevationGrid& g, const RegionCells& cs, double k, int32_t seed, PlaneFit& f) {
+  constexpr int kHalf = 3;
+  constexpr size_t kMinCells = 25;  // half of 7 x 7
+  const int m = g.cells(), si = seed / m, sj = seed % m;
+  const double r = g.resolution();
+  PlaneSums w;
+  for (int di = -kHalf; di <= kHalf; ++di)
+    for (int dj = -kHalf; dj <= kHalf; ++dj) {
+      if (!g.inside(si + di, sj + dj)) continue;
+      const size_t q = static_cast<size_t>(si + di) * m + sj + dj;
+      if (cs.var[q] > 0 && cs.label[q] < 0) w.add(1.0 / cs.var[q], di * r, dj * r, cs.z[q]);
+    }
+  if (w.n < kMinCells || !fitPlane(w, f)) return false;
+  const double dof = static_cast<double>(w.n) - 3;
+  return f.chi2 / dof <= 1 + k * std::sqrt(2 / dof);
+}
+
+/** Grows region `id` from `seed`, breadth first over 4-neighbours whose mean
+ *  lies within k sqrt(var) of the region's plane (refitted each time the
+ *  region doubles); its cells are appended to `members`, its sums to `s`. */
+void growRegion(const ElevationGrid& g, RegionCells& cs, double k, int32_t seed, int32_t id,
+                PlaneFit f, std::vector<int32_t>& members, PlaneSums& s) {
+  const int m = g.cells(), si = seed / m, sj = seed % m;
+  const double r = g.resolution();
+  const size_t start = members.size();
+  auto take = [&](int32_t q, double x, double y) {
+    const double dz = cs.z[q] - f.at(x, y);
+    if (dz * dz > k * k * cs.var[q]) return;
+    cs.label[q] = id;
+    members.push_back(q);
+    s.add(1.0 / cs.var[q], x, y, cs.z[q]);
+  };
+  take(seed, 0, 0);
+  size_t fitted = 16;
+  for (size_t h = start; h < members.size(); ++h) {
+    if (s.n >= 2 * fitted) {
+      PlaneFit nf;
+      if (fitPlane(s, nf)) f = nf;
+      fitted = s.n;
+    }
+    const int ai = members[h] / m, aj = members[h] % m;
+    const int nbs[4][2] = {{ai - 1, aj}, {ai + 1, aj}, {ai, aj - 1}, {ai, aj + 1}};
+    for (const auto& b : nbs) {
+      if (!g.inside(b[0], b[1])) continue;
+      const int32_t q = b[0] * m + b[1];
+      if (cs.var[q] > 0 && cs.label[q] < 0) take(q, (b[0] - si) * r, (b[1] - sj) * r);
+    }
+  }
+}
+
+/** Members of every region (in cell order) from the labels. */
+void regroup(const std::vector<int32_t>& label, size_t regions, std::vector<int32_t>& members,
+             std::vector<size_t>& starts) {
+  starts.assign(regions + 1, 0);
+  for (const int32_t l : label)
+    if (l >= 0) ++starts[l + 1];
+  for (size_t id = 0; id < regions; ++id) starts[id + 1] += starts[id];
+  members.resize(starts[regions]);
+  std::vector<size_t> at(starts.begin(), starts.end() - 1);
+  for (int32_t q = 0; q < static_cast<int32_t>(label.size()); ++q)
+    if (label[q] >= 0) members[at[label[q]]++] = q;
+}
+
+/** Each region's plane (x, y from its seed), fitted to all its cells. */
+struct RegionPlanes {
+  std::vector<PlaneFit> fit;
+  std::vector<uint8_t> ok;
+};
+
+/** Plain weighted fits of every region over all its cells. */
+void fitAll(const ElevationGrid& g, const RegionCells& cs, const std::vector<int32_t>& seeds,
+            const std::vector<int32_t>& members, const std::vector<size_t>& starts,
+            RegionPlanes& pl) {
+  const int m = g.cells();
+  const double r = g.resolution();
+  pl.fit.assign(seeds.size(), PlaneFit{});
+  pl.ok.assign(seeds.size(), 0);
+  for (size_t id = 0; id < seeds.size(); ++id) {
+    PlaneSums s;
+    const int si = seeds[id] / m, sj = seeds[id] % m;
+    for (size_t h = starts[id]; h < starts[id + 1]; ++h) {
+      const int32_t q = members[h];
+      s.add(1.0 / cs.var[q], (q / m - si) * r, (q % m - sj) * r, cs.z[q]);
+    }
+    pl.ok[id] = fitPlane(s, pl.fit[id]);
+  }
+}
+
+/** Border cells move to the neighbouring region whose plane fits their mean
+ *  better (within k sqrt(var)): a region grown first takes the cells past
+ *  a kink (a ramp's foot) that fit it within the noise; the region beyond
+ *  fits them better. A work list of border cells, until no cell moves. */
+void refineBorders(const ElevationGrid& g, const std::vector<int32_t>& seeds, double k,
+                   RegionCells& cs, const RegionPlanes& pl) {
+  const int m = g.cells();
+  const double r = g.resolution();
+  auto res2 = [&](int32_t q, int32_t id) {
+    const int32_t s = seeds[id];
+    const double dz = cs.z[q] - pl.fit[id].at((q / m - s / m) * r, (q % m - s % m) * r);
+    return dz * dz / cs.var[q];
+  };
+  auto usable = [&](int i, int j) {
+    if (!g.inside(i, j)) return -1;
+    const int32_t l = cs.label[i * m + j];
+    return l >= 0 && pl.ok[l] ? l : -1;
+  };
+  thread_local std::vector<int32_t> work;
+  thread_local std::vector<uint8_t> queued;
+  work.clear();
+  queued.assign(static_cast<size_t>(m) * m, 0);
+  auto push = [&](int i, int j) {
+    if (usable(i, j) < 0 || queued[i * m + j]) return;
+    queued[i * m + j] = 1;
+    work.push_back(i * m + j);
+  };
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      const int32_t own = usable(i, j);
+      if (own >= 0 && (usable(i - 1, j) != own || usable(i + 1, j) != own ||
+                       usable(i, j - 1) != own || usable(i, j + 1) != own))
+        push(i, j);
+    }
+  const size_t budget = 8 * work.size();
+  for (size_t h = 0; h < work.size() && h < budget; ++h) {
+    const int32_t q = work[h], own = cs.label[q];
+    const int i = q / m, j = q % m;
+    queued[q] = 0;
+    const int nbs[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+    double best = res2(q, own);
+    int32_t to = own;
+    for (const auto& b : nbs) {
+      const int32_t other = usable(b[0], b[1]);
+      if (other < 0 || other == own) continue;
+      const double e = res2(q, other);
+      if (e < best && e <= k * k) best = e, to = other;
+    }
+    if (to == own) continue;
+    cs.label[q] = to;
+    for (const auto& b : nbs) push(b[0], b[1]);
+  }
+}
+
+/** City-block distance (cells) of every labelled cell to the nearest cell
+ *  holding data outside its region (another region, a voxel not judged),
+ *  two passes; cells without data and the grid's edge are no border (the
+ *  end of the view is no kink). */
+void innerDistance(const std::vector<VoxelClass>& classes, int m, RegionCells& cs) {
+  const size_t mm = static_cast<size_t>(m) * m;
+  cs.inner.assign(mm, 0);
+  auto relax = [&](size_t k, bool inside, size_t n) {
+    if (!inside || classes[n] == VoxelClass::None) return;
+    const int32_t d = cs.label[n] != cs.label[k] ? 1 : cs.inner[n] + 1;
+    cs.inner[k] = std::min(cs.inner[k], d);
+  };
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      const size_t k = static_cast<size_t>(i) * m + j;
+      if (cs.label[k] < 0) continue;
+      cs.inner[k] = 1 << 20;
+      relax(k, i > 0, k - (i > 0 ? m : 0));
+      relax(k, j > 0, k - (j > 0 ? 1 : 0));
+    }
+  for (int i = m - 1; i >= 0; --i)
+    for (int j = m - 1; j >= 0; --j) {
+      const size_t k = static_cast<size_t>(i) * m + j;
+      if (cs.label[k] < 0) continue;
+      relax(k, i + 1 < m, k + (i + 1 < m ? m : 0));
+      relax(k, j + 1 < m, k + (j + 1 < m ? 1 : 0));
+    }
+}
+
+/** The slope fit of a region (its cells `members`, x and y from the seed)
+ *  over its cells farther from its border than their blur (a kink at the
+ *  border, a ramp's foot or landing, is smeared over that by the noise),
+ *  refitted kTrimPasses times to the cells within trim_k standard errors of
+ *  the previous fit, so that the cells taken past a kink do not bias it;
+ *  `n` receives the cells of the last fit. */
+bool trimmedFit(const ElevationGrid& g, const RegionCells& cs, const std::vector<int32_t>& members,
+                int32_t seed, double trim_k, PlaneFit& f, size_t& n) {
+  constexpr int kTrimPasses = 3;
+  const int m = g.cells(), si = seed / m, sj = seed % m;
+  const double r = g.resolution();
+  size_t interior = 0;
+  for (int pass = 0; pass <= kTrimPasses; ++pass) {
+    PlaneSums s;
+    for (const int32_t q : members) {
+      const double x = (q / m - si) * r, y = (q % m - sj) * r;
+      if (cs.inner[q] <= cs.blur[q]) continue;
+      const double dz = cs.z[q] - f.at(x, y);
+      if (pass == 0 || dz * dz <= trim_k * trim_k * cs.var[q])
+        s.add(1.0 / cs.var[q], x, y, cs.z[q]);
+      if (pass == 0) ++interior;
+    }
+    PlaneFit nf;
+    if (s.n < interior / 2 || !fitPlane(s, nf)) return pass > 0;
+    f = nf;
+    n = s.n;
+  }
+  return true;
+}
+
+/** Slope (rad) of the plane with gradient (gx, gy) (per m) against the
+ *  reference's: the angle between their normals. */
+double slopeAgainst(double gx, double gy, double rgx, double rgy) {
+  const double n1[3] = {-gx, -gy, 1}, n2[3] = {-rgx, -rgy, 1};
+  const double dot = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
+  const double cx = n1[1] * n2[2] - n1[2] * n2[1], cy = n1[2] * n2[0] - n1[0] * n2[2],
+               cz = n1[0] * n2[1] - n1[1] * n2[0];
+  return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot);
+}
+
+/** What a region's verdict needs: its fit and the floor slopes are measured
+ *  against (gradient per m and its variance). */
+struct RegionFit {
+  PlaneFit f;
+  double se2 = 0;  // variance of the gradient, scaled up when the residuals exceed the model
+  size_t n = 0;
+};
+
+RegionFit regionFit(const PlaneFit& f, size_t n) {
+  const double dof = static_cast<double>(n) - 3;
+  return {f, f.var * std::max(1.0, f.chi2 / dof), n};
+}
+
+/** Steep: the slope against the reference plus noise_k standard errors (of
+ *  the region's and the reference's gradients; a gradient's error bounds the
+ *  angle's) above max_slope_deg. */
+bool regionSteep(const RegionFit& a, const RegionFit& ref, const PerceptionParams& p) {
+  const double theta = slopeAgainst(a.f.gx, a.f.gy, ref.f.gx, ref.f.gy);
+  const double se = std::sqrt(a.se2 + ref.se2);
+  return theta + p.noise_k * se > p.max_slope_deg * M_PI / 180.0;
+}
+
+/** Per region: its verdict (0 not judged, 1 gentle, 2 steep), its fitted
+ *  plane (x, y from its seed) and its seed. */
+struct Verdicts {
+  std::vector<uint8_t> v;
+  std::vector<PlaneFit> fit;
+  std::vector<int32_t> seed;
+  double at(const ElevationGrid& g, int32_t id, double i, double j) const {
+    const int m = g.cells();
+    return fit[id].at((i - seed[id] / m) * g.resolution(), (j - seed[id] % m) * g.resolution());
+  }
+};
+
+/** The gentle regions reached from `floor_id` through borders without a
+ *  step: along the border of two regions (4-neighbour cell pairs) their
+ *  planes, at the pairs' midpoints, differ on average by no more than one
+ *  cell's rise at max_slope_deg plus noise_k sqrt(var) of the border cells
+ *  (the growth band: how far a border may lie from a kink) (a ramp's foot
+ *  or top: the planes meet at the border; a curb or a step: they differ by
+ *  its height all along). */
+std::vector<uint8_t> reachedRegions(const ElevationGrid& g, const RegionCells& cs,
+                                    const Verdicts& vd, int32_t floor_id,
+                                    const PerceptionParams& p) {
+  std::vector<uint8_t> reach(vd.v.size(), 0);
+  if (floor_id < 0) return reach;
+  std::map<std::pair<int32_t, int32_t>, std::array<double, 3>> border;  // sum d, sum var, pairs
+  const int m = g.cells();
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      const int32_t q = i * m + j, a = cs.label[q];
+      if (a < 0 || !vd.v[a]) continue;
+      const int nbs[2][2] = {{i + 1, j}, {i, j + 1}};
+      for (const auto& nb : nbs) {
+        if (!g.inside(nb[0], nb[1])) continue;
+        const int32_t q2 = nb[0] * m + nb[1], b = cs.label[q2];
+        if (b < 0 || b == a || !vd.v[b]) continue;
+        const double mi = 0.5 * (i + nb[0]), mj = 0.5 * (j + nb[1]);
+        const double d = vd.at(g, std::max(a, b), mi, mj) - vd.at(g, std::min(a, b), mi, mj);
+        auto& e = border[{std::min(a, b), std::max(a, b)}];
+        e[0] += d, e[1] += 0.5 * (cs.var[q] + cs.var[q2]), e[2] += 1;
+      }
+    }
+  const double rise = std::tan(p.max_slope_deg * M_PI / 180) * g.resolution();
+  reach[floor_id] = 1;
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (const auto& [key, e] : border) {
+      const int32_t a = key.first, b = key.second;
+      if (reach[a] == reach[b] || vd.v[reach[a] ? b : a] != 1) continue;
+      const double mean = e[0] / e[2], se = std::sqrt(e[1] / e[2]);
+      if (std::abs(mean) > rise + p.noise_k * se) continue;
+      reach[a] = reach[b] = 1;
+      grew = true;
+    }
+  }
+  return reach;
+}
+
+/** Rules 1 and 2 pass for voxel q against the plane of region l. */
+bool onRegionPlane(const ElevationGrid& g, const PerceptionParams& p, const Verdicts& vd, int32_t l,
+                   size_t q, const std::vector<float>& thr, const std::vector<float>& se) {
+  const int m = g.cells(), i = static_cast<int>(q / m), j = static_cast<int>(q % m);
+  const ElevationCell& c = g.at(i, j);
+  const double zp = vd.at(g, l, i, j);
+  if (std::max(std::abs(c.z_hi - zp), std::abs(c.z_lo - zp)) > thr[q]) return false;
+  return p.mean_step <= 0 || std::abs(c.mean - zp) <= p.mean_step + p.noise_k * se[q];
+}
+
+/** The far end of reached regions: voxels near depth_max (no region takes
+ *  them: their means are biased) connected to a reached region other than
+ *  the floor's through such voxels, breadth first, take that region's plane;
+ *  an obstacle voxel that passes rules 1 and 2 against it becomes ground. */
+void extendToFarEnd(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
+                    const Verdicts& vd, const std::vector<uint8_t>& reach, int32_t floor_id,
+                    const std::vector<float>& thr, const std::vector<float>& se,
+                    std::vector<VoxelClass>& classes, RegionCounts& rc) {
+  const int m = g.cells();
+  thread_local std::vector<int32_t> from, queue;
+  from.assign(classes.size(), -1);
+  queue.clear();
+  for (size_t q = 0; q < classes.size(); ++q) {
+    const int32_t l = cs.label[q];
+    if (l >= 0 && l != floor_id && reach[l] && vd.v[l] == 1) from[q] = l, queue.push_back(q);
+  }
+  for (size_t h = 0; h < queue.size(); ++h) {
+    const int i = queue[h] / m, j = queue[h] % m;
+    const int nbs[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+    for (const auto& b : nbs) {
+      if (!g.inside(b[0], b[1])) continue;
+      const int32_t q = b[0] * m + b[1];
+      if (!cs.far[q] || from[q] >= 0) continue;
+      from[q] = from[queue[h]];
+      queue.push_back(q);
+      if (classes[q] == VoxelClass::Obstacle && onRegionPlane(g, p, vd, from[q], q, thr, se)) {
+        classes[q] = VoxelClass::Ground;
+        ++rc.rescued;
+      }
+    }
+  }
+}
+
+/** Applies the verdicts: the ground voxels of steep regions become
+ *  obstacles; the obstacle voxels of reached regions (not the floor itself)
+ *  become ground when rules 1 and 2 pass against the region's own plane
+ *  (`thr`, `se`: per cell the rule-1 threshold and the mean's standard
+ *  error; a threshold's cells may lie within the growth band, not within
+ *  these); every voxel of a judged region is `decided`. */
+void applyVerdicts(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
+                   const Verdicts& vd, const std::vector<uint8_t>& reach, int32_t floor_id,
+                   const std::vector<float>& thr, const std::vector<float>& se,
+                   std::vector<VoxelClass>& classes, std::vector<uint8_t>& decided,
+                   RegionCounts& rc) {
+  for (size_t q = 0; q < classes.size(); ++q) {
+    const int32_t l = cs.label[q];
+    if (l < 0 || !vd.v[l]) continue;
+    // A gentle region's plane holds away from its border: the cells within
+    // the distance a max_slope_deg kink stays in its growth band (a steep
+    // ramp's first cells taken by the floor's region) keep rule 4's window.
+    decided[q] = vd.v[l] == 1 && cs.inner[q] <= kinkCells(g, p, cs.var[q]) ? 0 : vd.v[l];
+    if (vd.v[l] == 2 && classes[q] == VoxelClass::Ground) {
+      classes[q] = VoxelClass::Obstacle;
+      ++rc.steep;
+      continue;
+    }
+    if (!reach[l] || l == floor_id || classes[q] != VoxelClass::Obstacle) continue;
+    if (!onRegionPlane(g, p, vd, l, q, thr, se)) continue;
+    classes[q] = VoxelClass::Ground;
+    ++rc.rescued;
+  }
+}
+
+/** The regions: grown nearest the robot first, their borders refined
+ *  (twice, with the planes refitted); `members` of region id are
+ *  [starts[id], starts[id + 1]). */
+struct Regions {
+  std::vector<int32_t> seeds, members;
+  std::vector<size_t> starts;
+};
+
+void growAll(const ElevationGrid& g, const PerceptionParams& p, RegionCells& cs, Regions& rg) {
+  rg.seeds.clear(), rg.members.clear(), rg.starts.clear();
+  for (const int32_t seed : nearestFirst(g)) {
+    if (cs.var[seed] <= 0 || cs.label[seed] >= 0) continue;
+    PlaneFit f;
+    if (!seedPlane(g, cs, p.noise_k, seed, f)) continue;
+    rg.starts.push_back(rg.members.size());
+    rg.seeds.push_back(seed);
+    PlaneSums s;
+    growRegion(g, cs, p.noise_k, seed, static_cast<int32_t>(rg.seeds.size() - 1), f, rg.members, s);
+  }
+  rg.starts.push_back(rg.members.size());
+  thread_local RegionPlanes pl;
+  for (int round = 0; round < 2; ++round) {
+    fitAll(g, cs, rg.seeds, rg.members, rg.starts, pl);
+    refineBorders(g, rg.seeds, p.noise_k, cs, pl);
+    regroup(cs.label, rg.seeds.size(), rg.members, rg.starts);
+  }
+}
+
+/** The verdict on every region of at least region_min_cells (in its slope
+ *  fit too); returns the floor's region (-1: none). The floor slopes are
+ *  measured against: the first judged region (seeded nearest the robot)
+ *  when it is level within the mounting's tilt uncertainty, else `ref`. */
+int32_t judgeAll(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
+                 const Regions& rg, const SlopeReference& ref, Verdicts& vd) {
+  const double r = g.resolution();
+  const double tol = std::tan(std::sqrt(2.0) * p.prior_tilt_deg * M_PI / 180);
+  RegionFit floor{{0, ref.gi / r, ref.gj / r, 0, 0}, ref.var / (r * r)};
+  const size_t min_cells = static_cast<size_t>(p.region_min_cells);
+  vd.v.assign(rg.seeds.size(), 0);
+  vd.fit.assign(rg.seeds.size(), PlaneFit{});
+  vd.seed = rg.seeds;
+  int32_t floor_id = -1;
+  bool first = true;
+  thread_local std::vector<int32_t> one;
+  for (size_t id = 0; id < rg.seeds.size(); ++id) {
+    one.assign(rg.members.begin() + rg.starts[id], rg.members.begin() + rg.starts[id + 1]);
+    size_t n = 0;
+    if (one.size() < min_cells ||
+        !trimmedFit(g, cs, one, rg.seeds[id], p.region_trim_k, vd.fit[id], n) || n < min_cells)
+      continue;
+    const RegionFit a = regionFit(vd.fit[id], n);
+    if (first && std::hypot(a.f.gx, a.f.gy) <= tol) floor = a, floor_id = static_cast<int32_t>(id);
+    first = false;
+    vd.v[id] = regionSteep(a, floor, p) ? 2 : 1;
+  }
+  return floor_id;
+}
+
+}  // namespace
+
+RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
+                               const SlopeReference& ref, const std::vector<float>& thr,
+                               const std::vector<float>& se, std::vector<VoxelClass>& classes,
+                               std::vector<uint8_t>& decided) {
+  RegionCounts rc;
+  thread_local RegionCells cs;
+  thread_local Regions rg;
+  thread_local Verdicts vd;
+  prepareCells(g, p, o, thr, se, classes, cs);
+  growAll(g, p, cs, rg);
+  innerDistance(classes, g.cells(), cs);
+  const int32_t floor_id = judgeAll(g, p, cs, rg, ref, vd);
+  const std::vector<uint8_t> reach = reachedRegions(g, cs, vd, floor_id, p);
+  applyVerdicts(g, p, cs, vd, reach, floor_id, thr, se, classes, decided, rc);
+  extendToFarEnd(g, p, cs, vd, reach, floor_id, thr, se, classes, rc);
+  return rc;
+}
+
+}  // namespace carenav::perception
