@@ -108,17 +108,12 @@ void keepLargePatches(const ElevationGrid& g, const std::vector<VoxelClass>& cla
     comp.clear();
     comp.push_back(s0);
     seen[s0] = 1;
-    for (size_t h = 0; h < comp.size(); ++h) {
-      const int ci = comp[h] / m, cj = comp[h] % m;
-      const int nbs[4][2] = {{ci - 1, cj}, {ci + 1, cj}, {ci, cj - 1}, {ci, cj + 1}};
-      for (const auto& q : nbs) {
-        if (!g.inside(q[0], q[1])) continue;
-        const int32_t b = q[0] * m + q[1];
-        if (seen[b] || classes[b] != VoxelClass::Ground) continue;
+    for (size_t h = 0; h < comp.size(); ++h)
+      forEachNeighbour4(g, comp[h], [&](int, int, int32_t b) {
+        if (seen[b] || classes[b] != VoxelClass::Ground) return;
         seen[b] = 1;
         comp.push_back(b);
-      }
-    }
+      });
     if (comp.size() >= kMinSource) sources.insert(sources.end(), comp.begin(), comp.end());
   }
   queue.swap(sources);

@@ -47,4 +47,14 @@ RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p
                                const std::vector<float>& se, std::vector<VoxelClass>& classes,
                                std::vector<uint8_t>& decided);
 
+/** Calls f(i, j, q) for each of the 4 neighbours (i, j) of cell k of g that lie inside it,
+ *  q = i * m + j its index: the step of the grid's flood fills. */
+template <class F>
+void forEachNeighbour4(const ElevationGrid& g, int32_t k, F&& f) {
+  const int m = g.cells(), i = k / m, j = k % m;
+  const int nbs[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+  for (const auto& b : nbs)
+    if (g.inside(b[0], b[1])) f(b[0], b[1], static_cast<int32_t>(b[0] * m + b[1]));
+}
+
 }  // namespace carenav::perception

@@ -161,13 +161,9 @@ void growRegion(const ElevationGrid& g, RegionCells& cs, double k, int32_t seed,
       if (fitPlane(s, nf)) f = nf;
       fitted = s.n;
     }
-    const int ai = members[h] / m, aj = members[h] % m;
-    const int nbs[4][2] = {{ai - 1, aj}, {ai + 1, aj}, {ai, aj - 1}, {ai, aj + 1}};
-    for (const auto& b : nbs) {
-      if (!g.inside(b[0], b[1])) continue;
-      const int32_t q = b[0] * m + b[1];
-      if (cs.var[q] > 0 && cs.label[q] < 0) take(q, (b[0] - si) * r, (b[1] - sj) * r);
-    }
+    forEachNeighbour4(g, members[h], [&](int bi, int bj, int32_t q) {
+      if (cs.var[q] > 0 && cs.label[q] < 0) take(q, (bi - si) * r, (bj - sj) * r);
+    });
   }
 }
 
@@ -429,7 +425,6 @@ void extendToFarEnd(const ElevationGrid& g, const PerceptionParams& p, const Reg
                     const Verdicts& vd, const std::vector<uint8_t>& reach, int32_t floor_id,
                     const std::vector<float>& thr, const std::vector<float>& se,
                     std::vector<VoxelClass>& classes, RegionCounts& rc) {
-  const int m = g.cells();
   thread_local std::vector<int32_t> from, queue;
   from.assign(classes.size(), -1);
   queue.clear();
@@ -438,19 +433,16 @@ void extendToFarEnd(const ElevationGrid& g, const PerceptionParams& p, const Reg
     if (l >= 0 && l != floor_id && reach[l] && vd.v[l] == 1) from[q] = l, queue.push_back(q);
   }
   for (size_t h = 0; h < queue.size(); ++h) {
-    const int i = queue[h] / m, j = queue[h] % m;
-    const int nbs[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
-    for (const auto& b : nbs) {
-      if (!g.inside(b[0], b[1])) continue;
-      const int32_t q = b[0] * m + b[1];
-      if (!cs.far[q] || from[q] >= 0) continue;
-      from[q] = from[queue[h]];
+    const int32_t k = queue[h];
+    forEachNeighbour4(g, k, [&](int, int, int32_t q) {
+      if (!cs.far[q] || from[q] >= 0) return;
+      from[q] = from[k];
       queue.push_back(q);
       if (classes[q] == VoxelClass::Obstacle && onRegionPlane(g, p, vd, from[q], q, thr, se)) {
         classes[q] = VoxelClass::Ground;
         ++rc.rescued;
       }
-    }
+    });
   }
 }
 

@@ -237,22 +237,17 @@ size_t rescueGentleGround(const ElevationGrid& g, const Plane& plane, const Perc
   for (int32_t k = 0; k < m * m; ++k)
     if (classes[k] == VoxelClass::Ground) queue.push_back(k);
   size_t rescued = 0;
-  for (size_t h = 0; h < queue.size(); ++h) {
-    const int ai = queue[h] / m, aj = queue[h] % m;
-    const int nbs[4][2] = {{ai - 1, aj}, {ai + 1, aj}, {ai, aj - 1}, {ai, aj + 1}};
-    for (const auto& b : nbs) {
-      if (!g.inside(b[0], b[1])) continue;
-      const int32_t k = b[0] * m + b[1];
-      if (classes[k] != VoxelClass::Obstacle || g.at(b[0], b[1]).n < min_n) continue;
-      if (o && nearRangeLimit(g, p, *o, b[0], b[1])) continue;
+  for (size_t h = 0; h < queue.size(); ++h)
+    forEachNeighbour4(g, queue[h], [&](int bi, int bj, int32_t k) {
+      if (classes[k] != VoxelClass::Obstacle || g.at(bi, bj).n < min_n) return;
+      if (o && nearRangeLimit(g, p, *o, bi, bj)) return;
       double w[Sums::kN], slope, se;
-      s.window(b[0] - t.half, b[1] - t.half, b[0] + t.half + 1, b[1] + t.half + 1, w);
-      if (!fitWindow(w, t, slope, se) || slope > t.tmax) continue;
+      s.window(bi - t.half, bj - t.half, bi + t.half + 1, bj + t.half + 1, w);
+      if (!fitWindow(w, t, slope, se) || slope > t.tmax) return;
       classes[k] = VoxelClass::Ground;
       queue.push_back(k);
       ++rescued;
-    }
-  }
+    });
   return rescued;
 }
 
