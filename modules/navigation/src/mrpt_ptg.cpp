@@ -128,8 +128,7 @@ class MrptPtg final : public LocalPlanner {
     const TPoint2D last = path.back();
     if (in.goal && route->to_end < p_.goal_tolerance) return alignAtGoal(in);
 
-    const double corner = q_.corner_deg > 0 ? mrpt::DEG2RAD(q_.corner_deg) : M_PI;
-    const TPoint2D target = lookaheadPoint(path, in.pose.x, in.pose.y, q_.lookahead, corner);
+    const TPoint2D target = lookaheadPoint(path, in.pose.x, in.pose.y, q_.lookahead);
     const double c = std::cos(in.pose.phi), s = std::sin(in.pose.phi);
     const double tdx = target.x - in.pose.x, tdy = target.y - in.pose.y;
     Aim aim;

@@ -33,9 +33,6 @@ const ParamTable<MrptPtgParams>& MrptPtgParams::table() {
                 "normalised free distance from which the speed is full (ramp from secure_start)")
           .real("lookahead", &P::lookahead, "m", 0.1, 20,
                 "the target is this far along the route (the goal when nearer)")
-          .real("corner_deg", &P::corner_deg, "deg", 0, 180,
-                "the target stops at route vertices turning more than this until the robot is "
-                "near them (a door is entered on its axis); 0: cuts every corner")
           .real("goal_turn_gain", &P::goal_turn_gain, "1/s", 0.01, 100,
                 "at the goal: turn rate per radian of heading error (turn in place)")
           .check([](const P& q) -> std::optional<std::string> {

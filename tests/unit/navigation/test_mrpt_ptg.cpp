@@ -146,28 +146,6 @@ TEST(MrptPtg, FullEvalWithoutTheClearanceDiagramIsABadProfileNotACrash) {
   EXPECT_TRUE(pl->plan(in).ok);
 }
 
-TEST(MrptPtg, GoesToARouteCornerBeforeTurningItsWay) {
-  // The route turns 90 deg left 1.2 m ahead (a door's approach point): with
-  // corner_deg the target is the corner (straight on), without it the
-  // look-ahead point cuts the corner (turn left at once).
-  const auto p = nav();
-  const auto r = walkerRobot();
-  LocalCostmap map(p, Footprint(r.footprint, p.resolution));
-  map.build({0, 0}, {});
-  PlannerInput in;
-  in.map = &map;
-  in.path = {{0, 0}, {1.2, 0}, {1.2, 3}};
-  in.goal = TPose2D{1.2, 3, M_PI / 2};
-  MrptPtgParams q;
-  q.ptgs = "c";
-  const auto corner = makeMrptPtg(p, r, q)->plan(in);
-  q.corner_deg = 0;
-  const auto cut = makeMrptPtg(p, r, q)->plan(in);
-  ASSERT_TRUE(corner.ok && cut.ok);
-  EXPECT_LT(std::abs(corner.cmd.w), 0.1);
-  EXPECT_GT(cut.cmd.w, 0.2);
-}
-
 TEST(MrptPtg, HeadsForAFreeGoalAheadAndTurnsTowardsOneOnTheLeft) {
   const auto p = nav();
   const auto r = walkerRobot();

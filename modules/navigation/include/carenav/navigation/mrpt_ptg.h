@@ -53,11 +53,6 @@ struct MrptPtgParams {
    *  nearer); farther than [navigation] lookahead, so that the holonomic
    *  method sees an obstacle on the route while there is room to avoid it. */
   double lookahead = 2.5;
-  /** deg, the target stops at a route vertex turning more than this until
-   *  the robot is near it (lookaheadPoint): the approach point of a narrow
-   *  passage is such a vertex, so a door is entered on its axis instead of
-   *  aimed at from the side (0: the target cuts every corner). */
-  double corner_deg = 10;
   double goal_turn_gain = 1.5;  ///< 1/s, w = gain * heading error when turning at the goal
   static const ParamTable<MrptPtgParams>& table();
 };
