@@ -56,7 +56,9 @@ class GlobalPlanner {
 
  private:
   bool cellPassable(int ix, int iy) const;
-  bool lineOfSight(int x0, int y0, int x1, int y1) const;
+  /** Every half cell from (x0, y0) to (x1, y1) passable and at least
+   *  `need` metres from anything not free. */
+  bool lineOfSight(int x0, int y0, int x1, int y1, double need = 0) const;
   const mrpt::maps::COccupancyGridMap2D& map_;
   int nx_ = 0, ny_ = 0;
   double res_ = 0, radius_ = 0, influence_ = 0, weight_ = 0;
