@@ -342,7 +342,10 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g,
     return static_cast<double>(
         dist_[static_cast<size_t>((*cells)[k].second) * nx_ + (*cells)[k].first]);
   };
-  addWaypoints(*cells, passages, passage_approach_, sight, cell_clear, influence_, res_, r);
+  // Central shortcuts only when replanning around what the robot has seen
+  // (keep given): the first route on the map stays the plain line-of-sight one.
+  const double central = keep.empty() ? 0.0 : influence_;
+  addWaypoints(*cells, passages, passage_approach_, sight, cell_clear, central, res_, r);
   if (r.waypoints.empty()) r.waypoints.push_back(g);
   r.waypoints.back() = g;
   TPoint2D prev = s;
