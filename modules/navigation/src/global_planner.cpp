@@ -19,9 +19,7 @@ GlobalPlanner::GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double 
       influence_(robot_radius + p.plan_clearance + 0.5),
       weight_(p.plan_cost_weight),
       passage_margin_(p.passage_margin),
-      passage_approach_(p.passage_approach),
-      keep_width_(p.route_keep_width),
-      keep_weight_(p.route_keep_weight) {
+      passage_approach_(p.passage_approach) {
   free_.resize(static_cast<size_t>(nx_) * ny_);
   for (int y = 0; y < ny_; ++y)
     for (int x = 0; x < nx_; ++x)
@@ -54,20 +52,19 @@ bool GlobalPlanner::isPassable(double x, double y) const {
   return cellPassable(map_.x2idx(x), map_.y2idx(y));
 }
 
-bool GlobalPlanner::lineOfSight(int x0, int y0, int x1, int y1, double need) const {
+bool GlobalPlanner::lineOfSight(int x0, int y0, int x1, int y1) const {
   // Samples every half cell along the segment.
   const double len = std::hypot(x1 - x0, y1 - y0);
   const int n = std::max(1, static_cast<int>(std::ceil(len * 2)));
   for (int k = 0; k <= n; ++k) {
     const int x = static_cast<int>(std::lround(x0 + (x1 - x0) * double(k) / n));
     const int y = static_cast<int>(std::lround(y0 + (y1 - y0) * double(k) / n));
-    if (!cellPassable(x, y) || dist_[static_cast<size_t>(y) * nx_ + x] < need) return false;
+    if (!cellPassable(x, y)) return false;
   }
   return true;
 }
 
-bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip,
-                                  double slack) const {
+bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip) const {
   if (pts.empty()) return true;
   const TPoint2D s0 = pts.front();
   for (size_t i = 0; i + 1 < pts.size(); ++i) {
@@ -77,10 +74,7 @@ bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip,
       const double x = pts[i].x + (pts[i + 1].x - pts[i].x) * k / n;
       const double y = pts[i].y + (pts[i + 1].y - pts[i].y) * k / n;
       if (std::hypot(x - s0.x, y - s0.y) < skip) continue;
-      const int ix = map_.x2idx(x), iy = map_.y2idx(y);
-      if (ix < 0 || iy < 0 || ix >= nx_ || iy >= ny_) return false;
-      const size_t i = static_cast<size_t>(iy) * nx_ + ix;
-      if (!free_[i] || dist_[i] <= radius_ - slack) return false;
+      if (!isPassable(x, y)) return false;
     }
   }
   return true;
@@ -95,10 +89,6 @@ struct SearchGrid {
   int nx, ny;
   double res, influence, weight;
   const std::vector<float>& dist;
-  /** m from each cell to the route being replaced (empty: none), and the
-   *  extra cost per metre beyond keep_width of it. */
-  const std::vector<float>& keep;
-  double keep_width = 0, keep_weight = 0;
 };
 
 /** The cell of a start or goal point; refuses points off the map or not on free space. */
@@ -164,7 +154,6 @@ std::optional<std::vector<Cell>> aStarCells(const SearchGrid& g, Cell start, Cel
       const double d = g.dist[j];
       double penalty = d < g.influence ? g.weight * (g.influence - d) / g.influence : 0;
       if (!clear(ax, ay)) penalty += 10;  // inside the radius near start/goal
-      if (!g.keep.empty() && g.keep[j] > g.keep_width) penalty += g.keep_weight;
       const float c = cost[i] + static_cast<float>(step * (1 + penalty));
       if (c < cost[j]) {
         cost[j] = c;
@@ -242,25 +231,16 @@ std::vector<Passage> findPassages(const GlobalPlanner& planner, const std::vecto
 
 // Corners: from each anchor, the farthest cell still in line of sight;
 // passages split the path and add their three points.
-template <class LineOfSight, class Clear>
+template <class LineOfSight>
 void addWaypoints(const std::vector<Cell>& cells, const std::vector<Passage>& passages,
-                  double approach, const LineOfSight& lineOfSight, const Clear& clear, double keep,
-                  double res, Route& r) {
-  // A shortcut keeps the clearance of the cells it replaces (less half a
-  // cell, up to `keep`): the route stays central through the gaps A* chose
-  // instead of grazing the posts at the robot's radius.
+                  double approach, const LineOfSight& lineOfSight, Route& r) {
   auto simplify = [&](size_t from, size_t to) {  // cells (from, to], `to` included
     size_t anchor = from;
     while (anchor < to) {
       size_t next = anchor + 1;
-      double low = std::min(clear(anchor), clear(next));
-      while (next < to) {
-        const double need = std::min(std::min(low, clear(next + 1)), keep) - res / 2;
-        if (!lineOfSight(cells[anchor].first, cells[anchor].second, cells[next + 1].first,
-                         cells[next + 1].second, need))
-          break;
-        low = std::min(low, clear(++next));
-      }
+      while (next < to && lineOfSight(cells[anchor].first, cells[anchor].second,
+                                      cells[next + 1].first, cells[next + 1].second))
+        ++next;
       r.waypoints.push_back(r.cells[next]);
       anchor = next;
     }
@@ -287,28 +267,7 @@ void addWaypoints(const std::vector<Cell>& cells, const std::vector<Passage>& pa
 
 }  // namespace
 
-std::vector<float> GlobalPlanner::distanceTo(const std::vector<TPoint2D>& pts) const {
-  std::vector<uint8_t> off(free_.size(), 1);
-  bool any = false;
-  for (size_t i = 0; i + 1 < pts.size(); ++i) {
-    const double len = std::hypot(pts[i + 1].x - pts[i].x, pts[i + 1].y - pts[i].y);
-    const int n = std::max(1, static_cast<int>(std::ceil(len / (res_ / 2))));
-    for (int k = 0; k <= n; ++k) {
-      const int ix = map_.x2idx(pts[i].x + (pts[i + 1].x - pts[i].x) * k / n);
-      const int iy = map_.y2idx(pts[i].y + (pts[i + 1].y - pts[i].y) * k / n);
-      if (ix < 0 || iy < 0 || ix >= nx_ || iy >= ny_) continue;
-      off[static_cast<size_t>(iy) * nx_ + ix] = 0;
-      any = true;
-    }
-  }
-  if (!any) return {};
-  std::vector<float> d = squaredDistanceTransform<float>(off, nx_, ny_);
-  for (float& v : d) v = static_cast<float>(std::sqrt(v) * res_);
-  return d;
-}
-
-std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g,
-                                         const std::vector<TPoint2D>& keep) const {
+std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) const {
   const Cell s_cell = startOrGoalCell(map_, nx_, ny_, free_, s, "start");
   const Cell g_cell = startOrGoalCell(map_, nx_, ny_, free_, g, "goal");
   // Plain ints, not structured bindings: lambdas below capture them (C++17).
@@ -326,26 +285,15 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g,
     return ds <= near2 || dg <= near2;
   };
   auto clear = [&](int x, int y) { return cellPassable(x, y); };
-  const std::vector<float> keep_dist = keep_weight_ > 0 ? distanceTo(keep) : std::vector<float>{};
-  const SearchGrid grid{nx_,   ny_,       res_,        influence_,  weight_,
-                        dist_, keep_dist, keep_width_, keep_weight_};
+  const SearchGrid grid{nx_, ny_, res_, influence_, weight_, dist_};
   const auto cells = aStarCells(grid, s_cell, g_cell, passable, clear);
   if (!cells) return std::nullopt;
   Route r;
   for (const auto& [x, y] : *cells) r.cells.push_back({map_.idx2x(x), map_.idx2y(y)});
   const auto passages = findPassages(*this, *cells, r.cells, dist_, nx_, radius_ + passage_margin_,
                                      passage_approach_);
-  auto sight = [&](int x0, int y0, int x1, int y1, double need) {
-    return lineOfSight(x0, y0, x1, y1, need);
-  };
-  auto cell_clear = [&](size_t k) {
-    return static_cast<double>(
-        dist_[static_cast<size_t>((*cells)[k].second) * nx_ + (*cells)[k].first]);
-  };
-  // Central shortcuts only when replanning around what the robot has seen
-  // (keep given): the first route on the map stays the plain line-of-sight one.
-  const double central = keep.empty() ? 0.0 : influence_;
-  addWaypoints(*cells, passages, passage_approach_, sight, cell_clear, central, res_, r);
+  auto sight = [&](int x0, int y0, int x1, int y1) { return lineOfSight(x0, y0, x1, y1); };
+  addWaypoints(*cells, passages, passage_approach_, sight, r);
   if (r.waypoints.empty()) r.waypoints.push_back(g);
   r.waypoints.back() = g;
   TPoint2D prev = s;
@@ -368,13 +316,8 @@ std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map
   const GlobalPlanner gp(marked, robot_radius, p);
   std::vector<TPoint2D> ahead{from};
   if (route) ahead.insert(ahead.end(), route->waypoints.begin(), route->waypoints.end());
-  // Blocked: closer to a seen obstacle than the radius less one map cell
-  // (a hit is placed on the cell it falls in: a post's hits may grow it by
-  // one cell, which alone must not move the route). The new route keeps to
-  // the gaps of the old one where they are still passable.
-  const bool blocked = !route || !gp.polylineClear(ahead, skip, map.getResolution());
-  if (blocked && gp.isFree(from.x, from.y) && gp.isFree(goal.x, goal.y))
-    return gp.plan(from, goal, route ? ahead : std::vector<TPoint2D>{});
+  const bool blocked = !route || !gp.polylineClear(ahead, skip);
+  if (blocked && gp.isFree(from.x, from.y) && gp.isFree(goal.x, goal.y)) return gp.plan(from, goal);
   return std::nullopt;
 }
 

@@ -33,46 +33,33 @@ class GlobalPlanner {
   GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double robot_radius,
                 const NavigationParams& p, double free_threshold = 0.65);
   /** nullopt when no route exists. Throws InputError when start or goal lie
-   *  outside the map or on a cell that is not free. With `keep` (a route
-   *  being replaced, a polyline), cells farther than route_keep_width from
-   *  it cost route_keep_weight more per metre: the new route keeps the old
-   *  one's gaps unless they are blocked or the other way is clearly shorter
-   *  (hysteresis on the choice of gap, so the robot commits to it). */
-  std::optional<Route> plan(const TPoint2D& start, const TPoint2D& goal,
-                            const std::vector<TPoint2D>& keep = {}) const;
+   *  outside the map or on a cell that is not free. */
+  std::optional<Route> plan(const TPoint2D& start, const TPoint2D& goal) const;
   /** The cell at (x, y) is free space (not necessarily passable). */
   bool isFree(double x, double y) const;
   bool isPassable(double x, double y) const;
   /** True when every segment of the polyline crosses passable cells only
    *  (the first `skip` metres from its start excepted: the robot may stand
-   *  closer to an obstacle than the route may pass), cells within `slack`
-   *  metres less than the radius counting as passable. */
-  bool polylineClear(const std::vector<TPoint2D>& pts, double skip = 0, double slack = 0) const;
-  /** m from every cell (row-major) to the nearest cell on the polyline;
-   *  empty when it has no segment on the map. */
-  std::vector<float> distanceTo(const std::vector<TPoint2D>& pts) const;
+   *  closer to an obstacle than the route may pass). */
+  bool polylineClear(const std::vector<TPoint2D>& pts, double skip = 0) const;
   /** m, from (x, y) to the nearest cell that is not free. */
   double clearance(double x, double y) const;
 
  private:
   bool cellPassable(int ix, int iy) const;
-  /** Every half cell from (x0, y0) to (x1, y1) passable and at least
-   *  `need` metres from anything not free. */
-  bool lineOfSight(int x0, int y0, int x1, int y1, double need = 0) const;
+  bool lineOfSight(int x0, int y0, int x1, int y1) const;
   const mrpt::maps::COccupancyGridMap2D& map_;
   int nx_ = 0, ny_ = 0;
   double res_ = 0, radius_ = 0, influence_ = 0, weight_ = 0;
   double passage_margin_ = 0, passage_approach_ = 0;
-  double keep_width_ = 0, keep_weight_ = 0;
   std::vector<uint8_t> free_;
   std::vector<float> dist_;  // m to the nearest non-free cell
 };
 
 /** Replanning with what the robot has seen: marks `seen` obstacles (map
  *  frame) on a copy of `map` and, when the route ahead of `from` is no
- *  longer clear of them (beyond `skip` metres; by more than one map cell),
- *  plans a new one from `from` to `goal` that keeps to the old one where it
- *  can (GlobalPlanner::plan's `keep`). nullopt: keep the current route (still clear, or no new one
+ *  longer clear of them (beyond `skip` metres), plans a new one from `from`
+ *  to `goal`. nullopt: keep the current route (still clear, or no new one
  *  found: a route that flips between two equal detours makes the robot
  *  dither). */
 std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map,
