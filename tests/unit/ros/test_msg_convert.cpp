@@ -69,10 +69,11 @@ TEST(RosMsgConvert, DepthImageMetresAndRefusals) {
   EXPECT_FALSE(depthFromRos(img, camera(1, 0.5, 0), "cam", {})) << "short data";
 }
 
-TEST(RosMsgConvert, CloudDropsNonFinitePoints) {
+/** An empty PointCloud2 of w x h points with float32 fields x, y, z (12 bytes a point). */
+sensor_msgs::PointCloud2 xyzLayout(uint32_t w, uint32_t h) {
   sensor_msgs::PointCloud2 m;
-  m.width = 2;
-  m.height = 1;
+  m.width = w;
+  m.height = h;
   m.point_step = 12;
   for (int i = 0; i < 3; ++i) {
     sensor_msgs::PointField f;
@@ -82,6 +83,11 @@ TEST(RosMsgConvert, CloudDropsNonFinitePoints) {
     f.count = 1;
     m.fields.push_back(f);
   }
+  return m;
+}
+
+TEST(RosMsgConvert, CloudDropsNonFinitePoints) {
+  sensor_msgs::PointCloud2 m = xyzLayout(2, 1);
   const float v[6] = {1, 2, 3, std::numeric_limits<float>::quiet_NaN(), 0, 0};
   m.data.resize(24);
   std::memcpy(m.data.data(), v, 24);
@@ -95,18 +101,7 @@ TEST(RosMsgConvert, CloudDropsNonFinitePoints) {
 
 /** An xyz PointCloud2 of w x h points (row-major), NaN at pixel `hole`. */
 sensor_msgs::PointCloud2 xyzCloud(uint32_t w, uint32_t h, size_t hole) {
-  sensor_msgs::PointCloud2 m;
-  m.width = w;
-  m.height = h;
-  m.point_step = 12;
-  for (int i = 0; i < 3; ++i) {
-    sensor_msgs::PointField f;
-    f.name = std::string(1, "xyz"[i]);
-    f.offset = 4 * i;
-    f.datatype = sensor_msgs::PointField::FLOAT32;
-    f.count = 1;
-    m.fields.push_back(f);
-  }
+  sensor_msgs::PointCloud2 m = xyzLayout(w, h);
   m.data.resize(size_t{w} * h * 12);
   for (size_t k = 0; k < size_t{w} * h; ++k) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
