@@ -41,11 +41,22 @@ SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const 
  *  `se`: per cell the rule-1 threshold and the standard error of the mean. */
 struct RegionCounts {
   size_t steep = 0, rescued = 0;
+  bool floor = false;        ///< the floor's plane is a judged region's (else `ref`)
+  SlopeReference floor_ref;  ///< that region's gradient (per cell) and its variance
 };
 RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
                                const SlopeReference& ref, const std::vector<float>& thr,
                                const std::vector<float>& se, std::vector<VoxelClass>& classes,
                                std::vector<uint8_t>& decided);
+
+/** Rule 4 (markSteepGround()); `gentle` (one per cell, when given) is set
+ *  to 1 on the ground voxels that kept a slope verdict of at most
+ *  max_slope_deg: inside a gentle region (decided 1), or whose window's fit
+ *  reads no steeper than that. */
+size_t markSteepWindows(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                        const Point3f* o, std::vector<VoxelClass>& classes,
+                        const std::vector<uint8_t>* decided, std::vector<uint8_t>* gentle,
+                        const SlopeReference* ref = nullptr);
 
 /** Calls f(i, j, q) for each of the 4 neighbours (i, j) of cell k of g that lie inside it,
  *  q = i * m + j its index: the step of the grid's flood fills. */
