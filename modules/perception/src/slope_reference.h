@@ -30,10 +30,13 @@ SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const 
  *  uncertainty, else `ref`) plus noise_k standard errors exceeds
  *  max_slope_deg (its ground voxels become obstacles), gentle otherwise.
  *  Gentle regions reached from the floor's region through borders without
- *  a step get their obstacle voxels that pass rules 1-2 against the
- *  region's own plane back as ground, and so do voxels near depth_max (no
- *  region takes them) connected to such a region (not the floor's) through
- *  voxels near depth_max, against its plane. `decided` (one per cell) is set to 2
+ *  a step (and the floor's region itself when its plane lies at z = 0 under
+ *  the sensor) get their obstacle voxels that pass rules 1-2 against the
+ *  region's own plane, with the noise about that plane, back as ground, and
+ *  so do the voxels no judged region holds (near depth_max, not flat within
+ *  the level-floor model, in regions too small to judge) connected to such
+ *  a region (not the floor's) through voxels near depth_max or ground
+ *  voxels, against its plane. `decided` (one per cell) is set to 2
  *  on the voxels of steep regions and to 1 on those of gentle regions
  *  farther from the region's border than a max_slope_deg kink stays in the
  *  growth band (nearer ones keep rule 4's window: the first cells of a
