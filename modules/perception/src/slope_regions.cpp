@@ -447,10 +447,10 @@ bool onRegionPlane(const ElevationGrid& g, const PerceptionParams& p, const Poin
  *  depth_max, where the means are biased; not flat within the level-floor
  *  noise model; in a region too small to judge) connected to a reached
  *  region other than the floor's, breadth first, take that region's plane:
- *  an obstacle voxel with at least d_min samples that passes rules 1 and 2
- *  against it, with the noise about that plane (surfaceNoise()), becomes
- *  ground. The search goes on through the voxels near depth_max and the
- *  ground voxels (an obstacle stops it: nothing behind a step is reached). */
+ *  an obstacle voxel (near depth_max any, elsewhere with at least d_min
+ *  samples) that passes rules 1 and 2 against it, with the noise about that
+ *  plane (surfaceNoise()), becomes ground. The search goes on through the voxels near depth_max and
+ * the ground voxels (an obstacle stops it: nothing behind a step is reached). */
 void extendBeyondRegions(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
                          const RegionCells& cs, const Verdicts& vd,
                          const std::vector<uint8_t>& reach, int32_t floor_id,
