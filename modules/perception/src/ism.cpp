@@ -250,6 +250,23 @@ size_t rescueSlopes(const ElevationGrid& g, const PerceptionParams& p, const Vox
 
 }  // namespace
 
+namespace {
+
+/** What rule 4 said of a voxel (kept for the integration of the frame). */
+enum SlopeVerdict : uint8_t {
+  kNoVerdict = 0,
+  kSteepWindow = 1,  ///< ground after rules 1-3, 5 and 6, an obstacle by rule 4's window
+  kGentle = 2,       ///< ground, and its slope was judged at most max_slope_deg
+};
+
+/** Per voxel of the last classification on this thread: its SlopeVerdict. */
+std::vector<uint8_t>& slopeVerdicts() {
+  thread_local std::vector<uint8_t> v;
+  return v;
+}
+
+}  // namespace
+
 IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
                         const Point3f* o, std::vector<VoxelClass>& classes) {
   IsmStats st;
@@ -266,15 +283,28 @@ IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const Percep
   // Rule 6: smooth regions judged by their own plane; rule 4's window on the rest.
   thread_local std::vector<uint8_t> decided;
   decided.assign(mm, 0);
+  RegionCounts rc;
   if (o && p.depth_noise_std > 0 && p.max_slope_deg > 0 && std::abs(plane.c) >= 1e-6) {
     const uint32_t min_n = static_cast<uint32_t>(std::max(1.0, p.d_min));
     const SlopeReference ref = slopeReference(g, plane, p, classes, min_n);
-    const RegionCounts rc = judgeSlopeRegions(g, p, *o, ref, thr, se, classes, decided);
+    rc = judgeSlopeRegions(g, p, *o, ref, thr, se, classes, decided);
     st.rescued_voxels += rc.rescued;
     st.steep_voxels += rc.steep;
   }
-  st.steep_voxels += markSteepGround(g, plane, p, o, classes, &decided);
+  // Rule 4 measures slopes against the floor's plane rule 6 found (else its own reference).
+  thread_local std::vector<VoxelClass> before_rule4;
+  before_rule4 = classes;
+  thread_local std::vector<uint8_t> gentle;
+  gentle.assign(mm, 0);
+  st.steep_voxels += markSteepWindows(g, plane, p, o, classes, &decided, &gentle,
+                                      rc.floor ? &rc.floor_ref : nullptr);
+  std::vector<uint8_t>& verdict = slopeVerdicts();
+  verdict.assign(mm, kNoVerdict);
   for (size_t k = 0; k < mm; ++k) {
+    if (classes[k] == VoxelClass::Obstacle && before_rule4[k] == VoxelClass::Ground)
+      verdict[k] = kSteepWindow;
+    else if (classes[k] == VoxelClass::Ground && gentle[k])
+      verdict[k] = kGentle;
     if (classes[k] == VoxelClass::None) continue;
     ++st.voxels;
     classes[k] == VoxelClass::Obstacle ? ++st.obstacle_voxels : ++st.ground_voxels;
@@ -398,7 +428,19 @@ struct IsmFrame {
   double area, two_s2;
   double ca, sa, rx, ry;  // robot pose in the odometry frame
   float kg;
+  const std::vector<uint8_t>& verdict;  // per voxel its SlopeVerdict
 };
+
+/** Whether the voxel at (x, y) (robot frame) is ground whose own slope was
+ *  judged traversable (rule 4's window or a gentle region of rule 6). A
+ *  voxel that rule 4 made an obstacle was measured as a surface, not as a
+ *  return at an uncertain range: the Gaussian of [Garrote17, Eqs. 5-6]
+ *  that spreads an obstacle along its ray does not carry its slope verdict
+ *  over such a neighbour, which the same test found gentle. */
+bool gentleVerdict(const IsmFrame& f, double x, double y) {
+  const int ei = f.g.cellOf(x), ej = f.g.cellOf(y);
+  return f.g.inside(ei, ej) && f.verdict[static_cast<size_t>(ei) * f.g.cells() + ej] == kGentle;
+}
 
 /** The rays of voxel k into the grid: [Garrote17, Eq. 5] from the voxel back
  *  to the robot, then Eq. 6 beyond an obstacle. Each ray stops once
@@ -414,6 +456,7 @@ void integrateVoxel(const IsmFrame& f, int32_t k) {
   const int i = k / m, j = k % m;
   const ElevationCell& c = g.at(i, j);
   const bool obstacle = vc == VoxelClass::Obstacle;
+  const bool steep_window = obstacle && f.verdict[k] == kSteepWindow;
   const double x = g.centre(i), y = g.centre(j);
   const double rho = obstacle ? voxelDensity(c, f.area, f.p) : 0.0;
   const float amp = static_cast<float>(std::max(rho, 0.5));
@@ -442,6 +485,8 @@ void integrateVoxel(const IsmFrame& f, int32_t k) {
     // 'Inverse sensor model'.)
     const float pr =
         obstacle ? amp * IsmTables::at(gauss, D) : kg + (0.5f - kg) * IsmTables::at(sigm, D);
+    if (pr > 0.5f && steep_window && !at_voxel && gentleVerdict(f, x * dc / cv, y * dc / cv))
+      return true;
     if (pr < 0.5f && grid.frameFree(ci, cj) <= pr) {
       if (++sat >= kSaturated) return false;
     } else {
@@ -457,6 +502,7 @@ void integrateVoxel(const IsmFrame& f, int32_t k) {
   grid.walkSegment(
       wx, wy, cv, cv + 0.75 * grid.resolution() + beyond, [&](int ci, int cj, double dc) {
         if (ci == vi && cj == vj) return true;
+        if (steep_window && gentleVerdict(f, x * dc / cv, y * dc / cv)) return true;
         const double D = std::max(0.0, dc - cv);
         grid.addEvidence(ci, cj, std::max(static_cast<float>(rho) * IsmTables::at(gauss, D), 0.5f));
         return true;
@@ -488,7 +534,8 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
                        std::sin(grid.robot().phi()),
                        grid.robot().x(),
                        grid.robot().y(),
-                       static_cast<float>(p.k_g)};
+                       static_cast<float>(p.k_g),
+                       slopeVerdicts()};
   // Voxels from the farthest to the nearest.
   for (const int32_t k : farthestFirst(g))
     if (classes[k] != VoxelClass::None) integrateVoxel(frame, k);

@@ -30,10 +30,13 @@ SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const 
  *  uncertainty, else `ref`) plus noise_k standard errors exceeds
  *  max_slope_deg (its ground voxels become obstacles), gentle otherwise.
  *  Gentle regions reached from the floor's region through borders without
- *  a step get their obstacle voxels that pass rules 1-2 against the
- *  region's own plane back as ground, and so do voxels near depth_max (no
- *  region takes them) connected to such a region (not the floor's) through
- *  voxels near depth_max, against its plane. `decided` (one per cell) is set to 2
+ *  a step (and the floor's region itself when its plane lies at z = 0 under
+ *  the sensor) get their obstacle voxels that pass rules 1-2 against the
+ *  region's own plane, with the noise about that plane, back as ground, and
+ *  so do the voxels no judged region holds (near depth_max, not flat within
+ *  the level-floor model, in regions too small to judge) connected to such
+ *  a region (not the floor's) through voxels near depth_max or ground
+ *  voxels, against its plane. `decided` (one per cell) is set to 2
  *  on the voxels of steep regions and to 1 on those of gentle regions
  *  farther from the region's border than a max_slope_deg kink stays in the
  *  growth band (nearer ones keep rule 4's window: the first cells of a
@@ -41,11 +44,22 @@ SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const 
  *  `se`: per cell the rule-1 threshold and the standard error of the mean. */
 struct RegionCounts {
   size_t steep = 0, rescued = 0;
+  bool floor = false;        ///< the floor's plane is a judged region's (else `ref`)
+  SlopeReference floor_ref;  ///< that region's gradient (per cell) and its variance
 };
 RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
                                const SlopeReference& ref, const std::vector<float>& thr,
                                const std::vector<float>& se, std::vector<VoxelClass>& classes,
                                std::vector<uint8_t>& decided);
+
+/** Rule 4 (markSteepGround()); `gentle` (one per cell, when given) is set
+ *  to 1 on the ground voxels that kept a slope verdict of at most
+ *  max_slope_deg: inside a gentle region (decided 1), or whose window's fit
+ *  reads no steeper than that. */
+size_t markSteepWindows(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                        const Point3f* o, std::vector<VoxelClass>& classes,
+                        const std::vector<uint8_t>* decided, std::vector<uint8_t>* gentle,
+                        const SlopeReference* ref = nullptr);
 
 /** Calls f(i, j, q) for each of the 4 neighbours (i, j) of cell k of g that lie inside it,
  *  q = i * m + j its index: the step of the grid's flood fills. */

@@ -407,24 +407,56 @@ std::vector<uint8_t> reachedRegions(const ElevationGrid& g, const RegionCells& c
   return reach;
 }
 
-/** Rules 1 and 2 pass for voxel q against the plane of region l. */
-bool onRegionPlane(const ElevationGrid& g, const PerceptionParams& p, const Verdicts& vd, int32_t l,
-                   size_t q, const std::vector<float>& thr, const std::vector<float>& se) {
+/** Vertical noise (m) of the samples of voxel q about a surface with the
+ *  plane of region l. A sample moves along its ray by the depth noise
+ *  (depth_noise_std r^2); its height over the surface at the point where it
+ *  lands changes by that times (d_z - grad . d_xy), d the ray's unit
+ *  vector: depth_noise_std r H, H the sensor's height over the surface's
+ *  plane (vertically). On a level floor H is the sensor's height over the
+ *  voxel (sigma_v of rule 1); on a surface rising away from the sensor (a
+ *  ramp ahead) H is larger: on a 6 deg ramp from 1.5 m seen from 0.9 m, a
+ *  voxel 3 m ahead has H 1.04 m against 0.72 m over it, 1.4 times the
+ *  scatter. Never less than rule 1's sigma_v. */
+double surfaceNoise(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
+                    const Verdicts& vd, int32_t l, size_t q) {
+  const int m = g.cells(), i = static_cast<int>(q / m), j = static_cast<int>(q % m);
+  const ElevationCell& c = g.at(i, j);
+  const double dx = g.centre(i) - o.x, dy = g.centre(j) - o.y, dz = c.mean - o.z;
+  const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
+  const PlaneFit& f = vd.fit[l];
+  const double h = o.z - (vd.at(g, l, i, j) - f.gx * dx - f.gy * dy);
+  return p.depth_noise_std * r * std::max(h, std::abs(dz));
+}
+
+/** Rules 1 and 2 pass for voxel q against the plane of region l, with the
+ *  noise about that plane (surfaceNoise()). */
+bool onRegionPlane(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
+                   const Verdicts& vd, int32_t l, size_t q, const std::vector<float>& thr,
+                   const std::vector<float>& se) {
   const int m = g.cells(), i = static_cast<int>(q / m), j = static_cast<int>(q % m);
   const ElevationCell& c = g.at(i, j);
   const double zp = vd.at(g, l, i, j);
-  if (std::max(std::abs(c.z_hi - zp), std::abs(c.z_lo - zp)) > thr[q]) return false;
-  return p.mean_step <= 0 || std::abs(c.mean - zp) <= p.mean_step + p.noise_k * se[q];
+  const double sv = surfaceNoise(g, p, o, vd, l, q);
+  const double t = std::max<double>(thr[q], p.noise_k * sv);
+  if (std::max(std::abs(c.z_hi - zp), std::abs(c.z_lo - zp)) > t) return false;
+  const double e = std::max<double>(se[q], sv / std::sqrt(static_cast<double>(c.n)));
+  return p.mean_step <= 0 || std::abs(c.mean - zp) <= p.mean_step + p.noise_k * e;
 }
 
-/** The far end of reached regions: voxels near depth_max (no region takes
- *  them: their means are biased) connected to a reached region other than
- *  the floor's through such voxels, breadth first, take that region's plane;
- *  an obstacle voxel that passes rules 1 and 2 against it becomes ground. */
-void extendToFarEnd(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
-                    const Verdicts& vd, const std::vector<uint8_t>& reach, int32_t floor_id,
-                    const std::vector<float>& thr, const std::vector<float>& se,
-                    std::vector<VoxelClass>& classes, RegionCounts& rc) {
+/** Beyond the reached regions: the voxels no judged region holds (near
+ *  depth_max, where the means are biased; not flat within the level-floor
+ *  noise model; in a region too small to judge) connected to a reached
+ *  region other than the floor's, breadth first, take that region's plane:
+ *  an obstacle voxel (near depth_max any, elsewhere with at least d_min
+ *  samples) that passes rules 1 and 2 against it, with the noise about that
+ *  plane (surfaceNoise()), becomes ground. The search goes on through the voxels near depth_max and
+ * the ground voxels (an obstacle stops it: nothing behind a step is reached). */
+void extendBeyondRegions(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
+                         const RegionCells& cs, const Verdicts& vd,
+                         const std::vector<uint8_t>& reach, int32_t floor_id,
+                         const std::vector<float>& thr, const std::vector<float>& se,
+                         std::vector<VoxelClass>& classes, RegionCounts& rc) {
+  const uint32_t min_n = static_cast<uint32_t>(std::max(1.0, p.d_min));
   thread_local std::vector<int32_t> from, queue;
   from.assign(classes.size(), -1);
   queue.clear();
@@ -434,27 +466,47 @@ void extendToFarEnd(const ElevationGrid& g, const PerceptionParams& p, const Reg
   }
   for (size_t h = 0; h < queue.size(); ++h) {
     const int32_t k = queue[h];
-    forEachNeighbour4(g, k, [&](int, int, int32_t q) {
-      if (!cs.far[q] || from[q] >= 0) return;
+    forEachNeighbour4(g, k, [&](int bi, int bj, int32_t q) {
+      const int32_t l = cs.label[q];
+      if (from[q] >= 0 || classes[q] == VoxelClass::None || (l >= 0 && vd.v[l])) return;
       from[q] = from[k];
-      queue.push_back(q);
-      if (classes[q] == VoxelClass::Obstacle && onRegionPlane(g, p, vd, from[q], q, thr, se)) {
+      if (classes[q] == VoxelClass::Obstacle && (cs.far[q] || g.at(bi, bj).n >= min_n) &&
+          onRegionPlane(g, p, o, vd, from[q], q, thr, se)) {
         classes[q] = VoxelClass::Ground;
         ++rc.rescued;
       }
+      if (cs.far[q] || classes[q] == VoxelClass::Ground) queue.push_back(q);
     });
   }
 }
 
+/** Whether the floor's region (fit `fl`) is the floor the robot stands on:
+ *  its plane, extended to under the sensor, lies within
+ *  prior_height_tolerance plus noise_k standard errors (of its gradient,
+ *  times the distance from its seed) of the robot frame's floor z = 0. A
+ *  pitch or roll error turns the view about the sensor and leaves the floor
+ *  there; a lower surface seen first (the street past a curb in the blind
+ *  zone) is off by the drop. */
+bool underRobot(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
+                const Verdicts& vd, int32_t id, const RegionFit& fl) {
+  const int m = g.cells();
+  const double x = o.x - g.centre(vd.seed[id] / m), y = o.y - g.centre(vd.seed[id] % m);
+  return std::abs(vd.fit[id].at(x, y)) <=
+         p.prior_height_tolerance + p.noise_k * std::sqrt(fl.se2) * std::hypot(x, y);
+}
+
 /** Applies the verdicts: the ground voxels of steep regions become
- *  obstacles; the obstacle voxels of reached regions (not the floor itself)
- *  become ground when rules 1 and 2 pass against the region's own plane
- *  (`thr`, `se`: per cell the rule-1 threshold and the mean's standard
- *  error; a threshold's cells may lie within the growth band, not within
- *  these); every voxel of a judged region is `decided`. */
-void applyVerdicts(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
-                   const Verdicts& vd, const std::vector<uint8_t>& reach, int32_t floor_id,
-                   const std::vector<float>& thr, const std::vector<float>& se,
+ *  obstacles; the obstacle voxels of reached regions other than `skip`
+ *  (the floor's region too when it lies under the robot, underRobot(): its
+ *  plane is the floor's where the ground plane may lean, e.g. under a
+ *  calibration error) become ground when rules 1 and 2 pass against the
+ *  region's own plane with the noise about it (onRegionPlane(); `thr`,
+ *  `se`: per cell the rule-1 threshold and the mean's standard error; a
+ *  threshold's cells may lie within the growth band, not within these);
+ *  every voxel of a judged region is `decided`. */
+void applyVerdicts(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
+                   const RegionCells& cs, const Verdicts& vd, const std::vector<uint8_t>& reach,
+                   int32_t skip, const std::vector<float>& thr, const std::vector<float>& se,
                    std::vector<VoxelClass>& classes, std::vector<uint8_t>& decided,
                    RegionCounts& rc) {
   for (size_t q = 0; q < classes.size(); ++q) {
@@ -469,8 +521,8 @@ void applyVerdicts(const ElevationGrid& g, const PerceptionParams& p, const Regi
       ++rc.steep;
       continue;
     }
-    if (!reach[l] || l == floor_id || classes[q] != VoxelClass::Obstacle) continue;
-    if (!onRegionPlane(g, p, vd, l, q, thr, se)) continue;
+    if (!reach[l] || l == skip || classes[q] != VoxelClass::Obstacle) continue;
+    if (!onRegionPlane(g, p, o, vd, l, q, thr, se)) continue;
     classes[q] = VoxelClass::Ground;
     ++rc.rescued;
   }
@@ -509,10 +561,10 @@ void growAll(const ElevationGrid& g, const PerceptionParams& p, RegionCells& cs,
  *  measured against: the first judged region (seeded nearest the robot)
  *  when it is level within the mounting's tilt uncertainty, else `ref`. */
 int32_t judgeAll(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
-                 const Regions& rg, const SlopeReference& ref, Verdicts& vd) {
+                 const Regions& rg, const SlopeReference& ref, Verdicts& vd, RegionFit& floor) {
   const double r = g.resolution();
   const double tol = std::tan(std::sqrt(2.0) * p.prior_tilt_deg * M_PI / 180);
-  RegionFit floor{{0, ref.gi / r, ref.gj / r, 0, 0}, ref.var / (r * r)};
+  floor = {{0, ref.gi / r, ref.gj / r, 0, 0}, ref.var / (r * r)};
   const size_t min_cells = static_cast<size_t>(p.region_min_cells);
   vd.v.assign(rg.seeds.size(), 0);
   vd.fit.assign(rg.seeds.size(), PlaneFit{});
@@ -547,10 +599,18 @@ RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p
   prepareCells(g, p, o, thr, se, classes, cs);
   growAll(g, p, cs, rg);
   innerDistance(classes, g.cells(), cs);
-  const int32_t floor_id = judgeAll(g, p, cs, rg, ref, vd);
+  RegionFit floor;
+  const int32_t floor_id = judgeAll(g, p, cs, rg, ref, vd, floor);
+  if (floor_id >= 0) {
+    const double r = g.resolution();
+    rc.floor = true;
+    rc.floor_ref = {floor.f.gx * r, floor.f.gy * r, floor.se2 * r * r};
+  }
   const std::vector<uint8_t> reach = reachedRegions(g, cs, vd, floor_id, p);
-  applyVerdicts(g, p, cs, vd, reach, floor_id, thr, se, classes, decided, rc);
-  extendToFarEnd(g, p, cs, vd, reach, floor_id, thr, se, classes, rc);
+  const bool floor_under_robot = floor_id >= 0 && underRobot(g, p, o, vd, floor_id, floor);
+  applyVerdicts(g, p, o, cs, vd, reach, floor_under_robot ? -1 : floor_id, thr, se, classes,
+                decided, rc);
+  extendBeyondRegions(g, p, o, cs, vd, reach, floor_id, thr, se, classes, rc);
   return rc;
 }
 

@@ -109,22 +109,6 @@ bool fitWindow(const double w[Sums::kN], const SlopeTest& t, double& slope, doub
   return true;
 }
 
-/** Rule 4 on one window's sums: a plane fit with residuals of the noise's
- *  size (a step inside the window, two surfaces, is no slope) steeper than
- *  tmax against the reference, by more than k standard errors. */
-bool steepWindow(const double w[Sums::kN], const SlopeTest& t) {
-  double slope, se;
-  return fitWindow(w, t, slope, se) && slope > t.tmax && slope > t.k * se;
-}
-
-/** Rule 4 inside a gentle region (rule 6): the window steeper than tmax by
- *  more than k standard errors of its slope (a local edge the region's
- *  plane smooths over, e.g. a curb blurred by the noise). */
-bool steepBeyondDoubt(const double w[Sums::kN], const SlopeTest& t) {
-  double slope, se;
-  return fitWindow(w, t, slope, se) && slope - t.k * se > t.tmax;
-}
-
 /** Gradient (rise per cell along i and j) of the least-squares plane of the
  *  ground voxels nearest the robot: those within kNearDepth of the nearest
  *  one (the floor the robot stands on, as far as the camera sees it), and the
@@ -202,27 +186,39 @@ SlopeTest slopeTest(const ElevationGrid& g, const Plane& plane, const Perception
 
 }  // namespace
 
-size_t markSteepGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                       const Point3f* o, std::vector<VoxelClass>& classes,
-                       const std::vector<uint8_t>* decided) {
+size_t markSteepWindows(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                        const Point3f* o, std::vector<VoxelClass>& classes,
+                        const std::vector<uint8_t>* decided, std::vector<uint8_t>* gentle,
+                        const SlopeReference* ref) {
   if (p.max_slope_deg <= 0 || std::abs(plane.c) < 1e-6) return 0;
   const uint32_t min_n = static_cast<uint32_t>(std::max(1.0, p.d_min));
   thread_local Sums s;
   if (!buildSums(g, p, o, classes, min_n, s)) return 0;
-  const SlopeTest t = slopeTest(g, plane, p, classes, min_n);
+  SlopeTest t = slopeTest(g, plane, p, classes, min_n);
+  if (ref) t.g0i = ref->gi, t.g0j = ref->gj;
   std::vector<int32_t> steep;
   for (int i = s.i0; i < s.i0 + s.mi; ++i)
     for (int j = s.j0; j < s.j0 + s.mj; ++j) {
       if (!judged(g, classes, min_n, i, j) || (o && nearRangeLimit(g, p, *o, i, j))) continue;
-      const uint8_t region = decided ? (*decided)[static_cast<size_t>(i) * g.cells() + j] : 0;
+      const size_t k = static_cast<size_t>(i) * g.cells() + j;
+      const uint8_t region = decided ? (*decided)[k] : 0;
       if (region == 2) continue;
-      double w[Sums::kN];
+      double w[Sums::kN], slope, se;
       s.window(i - t.half, j - t.half, i + t.half + 1, j + t.half + 1, w);
-      if (region == 1 ? steepBeyondDoubt(w, t) : steepWindow(w, t))
-        steep.push_back(i * g.cells() + j);
+      const bool fit = fitWindow(w, t, slope, se);
+      if (fit && (region == 1 ? slope - t.k * se > t.tmax : slope > t.tmax && slope > t.k * se))
+        steep.push_back(static_cast<int32_t>(k));
+      else if (gentle && (region == 1 || (fit && slope <= t.tmax)))
+        (*gentle)[k] = 1;
     }
   for (const int32_t k : steep) classes[k] = VoxelClass::Obstacle;
   return steep.size();
+}
+
+size_t markSteepGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
+                       const Point3f* o, std::vector<VoxelClass>& classes,
+                       const std::vector<uint8_t>* decided) {
+  return markSteepWindows(g, plane, p, o, classes, decided, nullptr);
 }
 
 size_t rescueGentleGround(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,

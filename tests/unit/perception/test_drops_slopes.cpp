@@ -287,3 +287,84 @@ TEST(RampsByRegion, AStepIsNoRampWhateverItsTopsSlope) {
             occupiedSeen(without6.pipe->grid(), 1.6, 2.5, -0.5, 0.5));
   EXPECT_GT(occupiedSeen(with6.pipe->grid(), 1.6, 2.5, -0.5, 0.5), 0.15);
 }
+
+namespace {
+
+/** Voxel classes of a level surface at height `top` (robot frame), seen from
+ *  0.9 m (x 0.5-3 m, |y| <= 1 m, every 1 cm with 1 mm of deterministic
+ *  jitter), against the level plane at height `plane_z`. */
+std::vector<VoxelClass> classifyLevel(double top, double plane_z) {
+  Cloud c;
+  for (int a = 50; a < 300; ++a)
+    for (int b = -100; b <= 100; ++b) {
+      const double jitter = 0.001 * (((a * 7 + b * 13) % 5) - 2);
+      c.points.push_back({static_cast<float>(a * 0.01), static_cast<float>(b * 0.01),
+                          static_cast<float>(top + jitter)});
+    }
+  static ElevationGrid g(200, 0.05);
+  g.build(c, -1, 2, 3);
+  const Point3f o{0.2f, 0.f, 0.9f};
+  std::vector<VoxelClass> classes;
+  classifyVoxels(g, Plane::fromPointNormal({0, 0, plane_z}, Eigen::Vector3d(0, 0, 1)), walker(), &o,
+                 classes);
+  return classes;
+}
+
+/** A ramp of `deg` from 1.2 m to 2.7 m (then its landing) seen from `h` m,
+ *  pitched 25 deg with the pitch off by `err` deg, `noise` times the
+ *  profile's noise: occupied share of the seen cells 0.3-4.5 m ahead, |y|
+ *  <= 1.5 m. */
+double rampOccupied(double deg, double h, double err, double noise) {
+  Scene s;
+  s.floor(-10, 1.2).ramp(1.2, 2.7, 1.5 * std::tan(deg * kDeg));
+  const auto sh = perceive(s, camera(h, 25 + err), camera(h, 25), noise * kProfileNoise);
+  return occupiedSeen(sh.pipe->grid(), 0.3, 4.5, -1.5, 1.5);
+}
+
+}  // namespace
+
+TEST(FloorRegion, TheFloorUnderTheRobotIsGroundWhenThePlaneLiesAboveIt) {
+  // The plane 5 cm above the floor (the plateau case): rules 1-2
+  // call the whole floor an obstacle and rules 3 and 5 have no ground to
+  // start from. Rule 6's floor region (level, and at z = 0 under the sensor
+  // within prior_height_tolerance) gives back what passes rules 1-2
+  // against its own plane: without that, all of it stays an obstacle.
+  const auto classes = classifyLevel(0.0, 0.05);
+  EXPECT_LT(obstacleShare(classes, 0.6, 2.9), 0.02);
+}
+
+TEST(FloorRegion, ALowerSurfaceSeenFirstIsNoFloorUnderTheRobot) {
+  // The robot on a floor the camera does not see (the blind zone), the
+  // street 8 cm below it in view (a curb down just ahead): the nearest
+  // region is level but 8 cm off z = 0 under the sensor, so it is not the
+  // floor under the robot and keeps its obstacles (with the floor region
+  // rescued whatever its height, 0 % would be).
+  const auto classes = classifyLevel(-0.08, 0.0);
+  EXPECT_GT(obstacleShare(classes, 0.6, 2.9), 0.95);
+}
+
+TEST(SurfaceNoise, ARampRisingAwayIsJudgedWithTheNoiseAboutItsOwnPlane) {
+  // About a surface rising away from the sensor the samples scatter more
+  // than about a level floor (depth_noise_std r H, H the sensor's height
+  // over the ramp's plane). Judged with the level floor's noise: 4.9 % and
+  // 4.4 % occupied (its far end and cells that look uneven).
+  EXPECT_LT(rampOccupied(7.0, 0.9, 3, 2), 0.035);
+  EXPECT_LT(rampOccupied(6.0, 1.1, 3, 2), 0.035);
+}
+
+TEST(SlopeVerdicts, RuleFourMeasuresAgainstTheFloorsRegion) {
+  // Pitch off by +3 deg: the floor the robot stands on looks tilted by 3
+  // deg, beyond what slopeReference() accepts from the nearest ground
+  // voxels, so rule 4 alone measured the ramp against the level (6.5 deg +
+  // 3): 31 % and 22 % occupied. Against the floor's region of rule 6: < 3 %.
+  EXPECT_LT(rampOccupied(6.5, 0.9, 3, 2), 0.03);
+  EXPECT_LT(rampOccupied(6.0, 1.1, 3, 2), 0.03);
+}
+
+TEST(SlopeVerdicts, ASteepWindowDoesNotSpreadOverGroundJudgedGentle) {
+  // Rule 4's windows call a few cells of a 7 deg ramp steep (a slope
+  // standard error of ~1 deg at 3 m); the inverse sensor model spread each
+  // of them ~0.16 m along its ray over the cells whose own window or region
+  // read gentle: 11.7 % occupied. Without that spread: < 7 %.
+  EXPECT_LT(rampOccupied(7.0, 1.1, -3, 2), 0.07);
+}

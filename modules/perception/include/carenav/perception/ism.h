@@ -55,7 +55,9 @@ double measuredNoiseRatio(const ElevationGrid& g, const PerceptionParams& p,
 
 /** ISM integration of one elevation grid (robot frame) given the ground
  *  plane (robot frame), into `grid` at its current robot pose. `classes`
- *  (optional, one per elevation cell) receives each voxel's class. */
+ *  (optional, one per elevation cell) receives each voxel's class. An
+ *  obstacle that only rule 4's window made gives no spread along its ray to
+ *  ground voxels whose own slope was judged traversable. */
 IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
                       LocalOccupancy& grid, std::vector<VoxelClass>* classes = nullptr,
                       const Point3f* sensor_origin = nullptr);
