@@ -24,10 +24,11 @@ class GoalDwa final : public LocalPlanner {
  public:
   /** `goal_tolerance` (m) and `goal_tolerance_deg`: when the goal is reached
    *  ([navigation]). */
-  GoalDwa(const DwaParams& d, const GoalDwaParams& g, double goal_tolerance,
-          double goal_tolerance_deg, const RobotParams& r)
+  GoalDwa(const DwaParams& d, const GoalDwaParams& g, const CommitmentParams& c,
+          double goal_tolerance, double goal_tolerance_deg, const RobotParams& r)
       : d_(d),
         g_(g),
+        c_(c),
         goal_tol_(goal_tolerance),
         goal_tol_deg_(goal_tolerance_deg),
         r_(r),
@@ -105,7 +106,8 @@ class GoalDwa final : public LocalPlanner {
           const double path_dist = distanceToPath(path, e.x, e.y);
           const double speed = r_.v_max > 0 ? (r_.v_max - s.v) / r_.v_max : 0;
           tr.cost = g_.k_heading * heading_err + g_.k_path * path_dist + g_.k_speed * speed +
-                    g_.k_goal_obs / std::max(std::min(tr.contact_time, d_.sim_time), 1e-3);
+                    g_.k_goal_obs / std::max(std::min(tr.contact_time, d_.sim_time), 1e-3) +
+                    c_.k_switch * switches(s);
           if (tr.cost < best - 1e-12) {
             best = tr.cost;
             out.cmd = s;
@@ -125,10 +127,33 @@ class GoalDwa final : public LocalPlanner {
       if (out.ok) out.mark(PlanStatus::TurnInPlace, "turn in place (blocked ahead)");
     }
     if (!out.ok) out.mark(PlanStatus::NoAdmissible);
+    commit(out);
     return out;
   }
 
  private:
+  /** 1 when `s` backs up after a command forward, or turns on the spot
+   *  against the last turn on the spot; else 0. Driving forward again after
+   *  backing up is never held back (the rear is seen least). */
+  double switches(const Twist& s) const {
+    const int v = sign(s.v), w = sign(s.w);
+    if (v != 0) return v < 0 && v_sign_ > 0 ? 1.0 : 0.0;
+    return w != 0 && w == -turn_sign_ ? 1.0 : 0.0;
+  }
+  /** Remembers the directions of a plan's command: of travel when it moves,
+   *  of its turn when it turns on the spot (kept until a command moves on). */
+  void commit(const PlannerOutput& out) {
+    if (!out.ok || out.status == PlanStatus::GoalReached) return;
+    const int v = sign(out.cmd.v), w = sign(out.cmd.w);
+    if (v != 0) {
+      v_sign_ = v;
+      turn_sign_ = 0;
+    } else if (w != 0) {
+      turn_sign_ = w;
+    }
+  }
+  static int sign(double x) { return x > 1e-6 ? 1 : (x < -1e-6 ? -1 : 0); }
+
   /** The heading critic of `s` (rad). Taken after `ts` (along `motion`
    *  when given), unwrapped: the turn still needed (from the start heading,
    *  within +-pi) less the turn made, which may exceed pi at a fast robot's
@@ -148,10 +173,12 @@ class GoalDwa final : public LocalPlanner {
         in.goal
             ? std::max(win.v_lo, std::sqrt(2 * r_.acc_v * std::max(0.0, to_goal - goal_tol_ / 2)))
             : std::numeric_limits<double>::infinity();
+    // Backward only to slow down from backing up, unless `reverse`.
+    const double v_lo = c_.reverse ? win.v_lo : std::min(0.0, win.v_hi);
     std::vector<Twist> out;
     for (const Twist& s : sampleWindow(win, d_))
       if ((!turn_only || std::abs(s.v) < 1e-9) && (std::abs(s.v) > 1e-6 || std::abs(s.w) > 1e-6) &&
-          s.v <= v_arrive + 1e-9)
+          s.v <= v_arrive + 1e-9 && s.v >= v_lo - 1e-9)
         out.push_back(s);
     return out;
   }
@@ -179,14 +206,25 @@ class GoalDwa final : public LocalPlanner {
       const TPoint2D t = lookaheadPoint(path, e.x, e.y, g_.lookahead, corner_);
       needed = angleDiff(std::atan2(t.y - e.y, t.x - e.x), in.pose.phi);
     }
-    return std::abs(needed - turned);
+    return std::abs(committed(needed) - turned);
+  }
+  /** The turn `needed` (rad, within +-pi) the way the last turn on the spot
+   *  went, when that way is longer by less than k_switch / k_heading: with
+   *  the target near behind, the shorter side flips with every small change
+   *  and the robot turned back and forth on the spot. */
+  double committed(double needed) const {
+    if (turn_sign_ == 0 || sign(needed) != -turn_sign_ || g_.k_heading <= 0) return needed;
+    const double other = needed + turn_sign_ * 2 * M_PI;
+    return std::abs(other) - std::abs(needed) < c_.k_switch / g_.k_heading ? other : needed;
   }
 
   DwaParams d_;
   GoalDwaParams g_;
+  CommitmentParams c_;
   double goal_tol_, goal_tol_deg_;
   RobotParams r_;
   double corner_;
+  int v_sign_ = 0, turn_sign_ = 0;  // the commitment: directions of the last command
 };
 
 }  // namespace
@@ -211,7 +249,10 @@ TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, d
     }
     left -= d;
     p = path[i];
-    if (corner < M_PI && i + 1 < path.size() &&
+    // A vertex is reached within `reached` of it, or once the robot is
+    // abeam of it (less than `reached` before it along the path): a robot
+    // passing it a little aside must not turn back to it.
+    if (corner < M_PI && i + 1 < path.size() && lookahead - left > reached &&
         std::hypot(path[i].x - x, path[i].y - y) > reached) {
       const double a0 = std::atan2(path[i].y - path[i - 1].y, path[i].x - path[i - 1].x);
       const double a1 = std::atan2(path[i + 1].y - path[i].y, path[i + 1].x - path[i].x);
@@ -222,7 +263,7 @@ TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, d
 }
 
 std::unique_ptr<LocalPlanner> makeGoalDwa(const NavigationParams& p, const RobotParams& r) {
-  return std::make_unique<GoalDwa>(p, p, p.goal_tolerance, p.goal_tolerance_deg, r);
+  return std::make_unique<GoalDwa>(p, p, p, p.goal_tolerance, p.goal_tolerance_deg, r);
 }
 
 }  // namespace carenav::navigation

@@ -77,6 +77,20 @@ const ParamTable<GoalDwaParams>& GoalDwaParams::table() {
   return t;
 }
 
+const ParamTable<CommitmentParams>& CommitmentParams::table() {
+  using P = CommitmentParams;
+  static const auto t =
+      ParamTable<P>()
+          .real("k_switch", &P::k_switch, "", 0, 100,
+                "goal-dwa: extra cost of backing up after a command forward; margin (over "
+                "k_heading, rad) by which the other side must be shorter for a turn on the "
+                "spot to change direction (0: no commitment)")
+          .flag("reverse", &P::reverse,
+                "goal-dwa may back up (off: forward only; the recoveries back out along the "
+                "way the robot came)");
+  return t;
+}
+
 const ParamTable<LocalMapParams>& LocalMapParams::table() {
   using P = LocalMapParams;
   static const auto t =
@@ -166,6 +180,7 @@ NavigationParams NavigationParams::fromProfile(const Profile& profile) {
   static_cast<LocalMapParams&>(p) = profile.section<LocalMapParams>("nav.local_map");
   static_cast<PeopleParams&>(p) = profile.section<PeopleParams>("nav.people");
   static_cast<SafetyParams&>(p) = profile.section<SafetyParams>("nav.safety");
+  static_cast<CommitmentParams&>(p) = profile.section<CommitmentParams>("nav.commitment");
   return p;
 }
 
@@ -190,6 +205,9 @@ void registerProfileSections() {
   reg.addRenames("navigation", "nav.local_map", keysOf<LocalMapParams>());
   reg.addRenames("navigation", "nav.people", keysOf<PeopleParams>());
   reg.addRenames("navigation", "nav.safety", keysOf<SafetyParams>());
+  reg.add(SectionSchema::of(CommitmentParams::table(), "nav.commitment",
+                            "committing to a way through clutter: goal-dwa keeps its turn and "
+                            "drives forward"));
   reg.add(SectionSchema::of(
       MrptPtgParams::table(), "nav.mrpt_ptg",
       "mrpt-ptg local planner: MRPT's TP-space reactive navigation (PTGs, holonomic method)"));

@@ -218,7 +218,8 @@ class PlannerRegistry {
  *  nearest to (x, y); its last point when the rest is shorter. With
  *  `corner` (rad) below pi the look-ahead stops at a vertex where the
  *  polyline turns by more than that, until (x, y) is within `reached` of
- *  it: the robot goes to the corner instead of cutting it (the approach
+ *  it or abeam of it (its nearest point on the polyline less than `reached`
+ *  before it): the robot goes to the corner instead of cutting it (the approach
  *  point of a narrow passage is such a corner: it enters on the axis).
  *  A one-point path gives its point, an empty one (x, y). */
 TPoint2D lookaheadPoint(const std::vector<TPoint2D>& path, double x, double y, double lookahead,

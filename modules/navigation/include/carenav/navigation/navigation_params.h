@@ -58,6 +58,29 @@ struct GoalDwaParams {
   static const ParamTable<GoalDwaParams>& table();
 };
 
+/** [nav.commitment]: committing to a way through clutter, read by goal-dwa.
+ *  ```ini
+ *  [nav.commitment]
+ *  k_switch = 0.3
+ *  reverse = false
+ *  ```
+ */
+struct CommitmentParams {
+  /** goal-dwa, hysteresis (as the oscillation critic of ROS's DWB local
+   *  planner): extra cost of a candidate that backs up after a command
+   *  forward, and the margin (over k_heading, in rad) by which the other
+   *  side must be shorter for a turn on the spot to change direction
+   *  (0: chosen afresh every cycle). */
+  double k_switch = 0.3;
+  /** goal-dwa: backward candidates in the planner's own window. Off: it
+   *  drives forward (slowing down when it moves backward); backing up is
+   *  left to the recoveries, which retrace the way the robot came (known
+   *  free), while the planner's memory of what lies behind may have aged
+   *  out. */
+  bool reverse = false;
+  static const ParamTable<CommitmentParams>& table();
+};
+
 /** [nav.local_map]: robot-centred local cost map and obstacle memory
  *  (HOBBIT, [Puente14, App. Sec. IV-C, Table I]); read by LocalCostmap and
  *  the Navigator's obstacle memory.
@@ -139,7 +162,8 @@ struct NavigationParams : DwaParams,
                           GoalDwaParams,
                           LocalMapParams,
                           PeopleParams,
-                          SafetyParams {
+                          SafetyParams,
+                          CommitmentParams {
   std::string plugin = "goal-dwa";  ///< local method, by name (LocalPlannerRegistry)
   // Global route (A* on the inflated static map) and goal
   double plan_clearance = 0.1;  ///< m, extra clearance kept by the route beyond the footprint
@@ -151,7 +175,8 @@ struct NavigationParams : DwaParams,
   /** The keys of [navigation] only (the general ones). */
   static const ParamTable<NavigationParams>& table();
   /** [navigation], [nav.user_intent_dwa], [nav.goal_dwa], [nav.local_map],
-   *  [nav.people] and [nav.safety] of `profile`, old keys included. */
+   *  [nav.people], [nav.safety] and [nav.commitment] of `profile`, old keys
+   *  included. */
   static NavigationParams fromProfile(const Profile& profile);
 };
 
