@@ -78,6 +78,7 @@ void ObstacleMemory::add(const WorldScan& s, double t) {
   // Clear along each ray, from where the sensor sees to one cell before
   // the end point, then mark the hits. Non-finite points are no cells.
   if (!finite(s.origin)) return;
+  view_.add(s);
   // No remembered cell lies farther from the sensor than `reach`: rays are
   // walked no farther (a long ray in a big room costs nothing then).
   double reach = 0;
@@ -105,30 +106,109 @@ void ObstacleMemory::add(const WorldScan& s, double t) {
   // Hits whose cell lies beyond the radius would be dropped by the next
   // prune: they are not kept now (nor do they lengthen the next scan's rays).
   const TPoint2D centre = s.robot.value_or(s.origin);
+  std::vector<std::pair<uint64_t, TPoint2D>> hits;
   for (size_t i = 0; i < s.ends.size(); ++i) {
     if (i >= s.hit.size() || !s.hit[i] || !finite(s.ends[i])) continue;
     const uint64_t k = key(s.ends[i].x, s.ends[i].y);
     const double x = (static_cast<double>(keyX(k)) + 0.5) * res_;
     const double y = (static_cast<double>(keyY(k)) + 0.5) * res_;
     if (std::hypot(x - centre.x, y - centre.y) > radius_) continue;
-    cells_[k] = {t, static_cast<float>(s.ends[i].x), static_cast<float>(s.ends[i].y)};
+    hits.push_back({k, s.ends[i]});
   }
+  // Each cell the scan hit holds the segment of this scan's hits in it
+  // (an older scan's is replaced).
+  std::stable_sort(hits.begin(), hits.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<TPoint2D> pts(hits.size());
+  for (size_t i = 0; i < hits.size(); ++i) pts[i] = hits[i].second;
+  for (size_t b = 0, e = 0; b < hits.size(); b = e) {
+    while (e < hits.size() && hits[e].first == hits[b].first) ++e;
+    const Segment g = fitAlongBearings(s.origin, pts, b, e);
+    cells_[hits[b].first] = {t, static_cast<float>(g.a.x), static_cast<float>(g.a.y),
+                             static_cast<float>(g.b.x), static_cast<float>(g.b.y)};
+  }
+}
+
+Segment fitAlongBearings(const TPoint2D& o, const std::vector<TPoint2D>& pts, size_t begin,
+                         size_t end) {
+  if (end - begin < 2) return {pts[begin], pts[begin]};
+  if (end - begin == 2) return {pts[begin], pts[begin + 1]};
+  // Bearings about the first hit's (a cell spans a small angle), ranges.
+  const double a0 = std::atan2(pts[begin].y - o.y, pts[begin].x - o.x);
+  const double n = static_cast<double>(end - begin);
+  double ma = 0, mr = 0, lo = 0, hi = 0;
+  for (size_t i = begin; i < end; ++i) {
+    const double a = std::remainder(std::atan2(pts[i].y - o.y, pts[i].x - o.x) - a0, 2 * M_PI);
+    ma += a, mr += std::hypot(pts[i].x - o.x, pts[i].y - o.y);
+    lo = std::min(lo, a), hi = std::max(hi, a);
+  }
+  ma /= n, mr /= n;
+  double saa = 0, sar = 0;
+  for (size_t i = begin; i < end; ++i) {
+    const double a = std::remainder(std::atan2(pts[i].y - o.y, pts[i].x - o.x) - a0, 2 * M_PI) - ma;
+    saa += a * a, sar += a * (std::hypot(pts[i].x - o.x, pts[i].y - o.y) - mr);
+  }
+  // Range linear in bearing (a plane face), fitted by least squares; the
+  // ends at the extreme bearings.
+  const double slope = saa > 0 ? sar / saa : 0.0;
+  auto at = [&](double a) {
+    const double r = mr + slope * (a - ma);
+    return TPoint2D{o.x + r * std::cos(a0 + a), o.y + r * std::sin(a0 + a)};
+  };
+  return {at(lo), at(hi)};
 }
 
 void ObstacleMemory::addPoints(const std::vector<TPoint2D>& points, double t) {
   for (const auto& p : points)
-    if (finite(p)) cells_[key(p.x, p.y)] = {t, static_cast<float>(p.x), static_cast<float>(p.y)};
+    if (finite(p)) {
+      const auto x = static_cast<float>(p.x), y = static_cast<float>(p.y);
+      cells_[key(p.x, p.y)] = {t, x, y, x, y};
+    }
 }
 
 void ObstacleMemory::prune(double now, const TPoint2D& robot) {
   for (auto it = cells_.begin(); it != cells_.end();) {
     const double x = (static_cast<double>(keyX(it->first)) + 0.5) * res_;
     const double y = (static_cast<double>(keyY(it->first)) + 0.5) * res_;
-    if (now - it->second.t > persistence_ || std::hypot(x - robot.x, y - robot.y) > radius_)
+    // Out of date only where the sensors looked last (no scan ever:
+    // everywhere); out of every sensor's view it stays.
+    const bool stale = now - it->second.t > persistence_ && (!view_.any || view_.covers(x, y));
+    if (stale || std::hypot(x - robot.x, y - robot.y) > radius_)
       it = cells_.erase(it);
     else
       ++it;
   }
+  view_.next = true;
+}
+
+int ObstacleMemory::View::bin(double x, double y) const {
+  const double a = std::atan2(y - origin.y, x - origin.x);
+  return std::clamp(static_cast<int>(std::floor((a + M_PI) / (2 * M_PI) * kBins)), 0, kBins - 1);
+}
+
+void ObstacleMemory::View::add(const WorldScan& s) {
+  // The first scan after a prune starts the view afresh; the ones before
+  // the next prune add to it.
+  if (!any || next) bins.assign(kBins, 0);
+  any = true;
+  next = false;
+  origin = s.origin;
+  // Each ray's bearing, and the bins between neighbouring rays up to 3 deg
+  // apart (a sparse scan still covers the arc between its rays).
+  int prev = -1;
+  for (const auto& e : s.ends) {
+    if (!finite(e)) continue;
+    const int b = bin(e.x, e.y);
+    bins[static_cast<size_t>(b)] = 1;
+    const int gap = prev < 0 ? 0 : (b - prev + kBins) % kBins;
+    if (gap > 1 && gap <= 3)
+      for (int k = 1; k < gap; ++k) bins[static_cast<size_t>((prev + k) % kBins)] = 1;
+    prev = b;
+  }
+}
+
+bool ObstacleMemory::View::covers(double x, double y) const {
+  return bins[static_cast<size_t>(bin(x, y))] != 0;
 }
 
 std::vector<TPoint2D> ObstacleMemory::points() const {
@@ -136,7 +216,8 @@ std::vector<TPoint2D> ObstacleMemory::points() const {
   out.reserve(cells_.size());
   for (const auto& [k, c] : cells_) {
     (void)k;
-    out.push_back({c.x, c.y});
+    out.push_back({c.ax, c.ay});
+    if (c.bx != c.ax || c.by != c.ay) out.push_back({c.bx, c.by});
   }
   return out;
 }
@@ -306,6 +387,9 @@ LocalCostmap::LocalCostmap(const LocalMapParams& p, const Footprint& footprint)
   occ_.assign(dist_.size(), 0);
   px_.assign(dist_.size(), 0.f);
   py_.assign(dist_.size(), 0.f);
+  qx_ = px_;
+  qy_ = py_;
+  count_.assign(dist_.size(), 0);
 }
 
 // Clamped like the memory's keys: a point far off the grid is just outside.
@@ -313,6 +397,36 @@ int LocalCostmap::cellX(double x) const { return cellIndex(x - x0_, res_); }
 int LocalCostmap::cellY(double y) const { return cellIndex(y - y0_, res_); }
 
 void LocalCostmap::build(const TPoint2D& c, const std::vector<TPoint2D>& obstacles,
+                         const mrpt::maps::COccupancyGridMap2D* static_map,
+                         double static_occupied) {
+  build(c, obstacles, {}, static_map, static_occupied);
+}
+
+void LocalCostmap::addToCell(size_t i, const TPoint2D& o) {
+  const auto x = static_cast<float>(o.x), y = static_cast<float>(o.y);
+  if (occ_[i] != 1) {  // the first point
+    occ_[i] = 1;
+    count_[i] = 1;
+    px_[i] = qx_[i] = x;
+    py_[i] = qy_[i] = y;
+    return;
+  }
+  if (++count_[i] == 2) {  // a segment from the first to this one
+    qx_[i] = x, qy_[i] = y;
+    return;
+  }
+  if (count_[i] == 3) {  // the box of the segment's ends
+    const float ax = px_[i], ay = py_[i], bx = qx_[i], by = qy_[i];
+    px_[i] = std::min(ax, bx), py_[i] = std::min(ay, by);
+    qx_[i] = std::max(ax, bx), qy_[i] = std::max(ay, by);
+  }
+  px_[i] = std::min(px_[i], x), py_[i] = std::min(py_[i], y);
+  qx_[i] = std::max(qx_[i], x), qy_[i] = std::max(qy_[i], y);
+  count_[i] = 3;
+}
+
+void LocalCostmap::build(const TPoint2D& c, const std::vector<TPoint2D>& obstacles,
+                         const std::vector<TPoint2D>& cell_points,
                          const mrpt::maps::COccupancyGridMap2D* static_map,
                          double static_occupied) {
   // Snap the origin to the cell grid so that cells do not shift between builds.
@@ -329,16 +443,21 @@ void LocalCostmap::build(const TPoint2D& c, const std::vector<TPoint2D>& obstacl
     free[i] = 0;
     if (!occ_[i]) occ_[i] = 2;
   };
+  // A cell's points: one is a point, two a segment (the memory's segment of
+  // a scan's hits), more their box; a cell point stands alone.
   for (const auto& o : obstacles) {
     const int ix = cellX(o.x), iy = cellY(o.y);
     if (ix < 0 || iy < 0 || ix >= n_ || iy >= n_) continue;
     mark(ix, iy);
-    // The cell's point (the last when several fall in it: the memory holds
-    // one per cell of this size).
+    addToCell(static_cast<size_t>(iy) * n_ + ix, o);
+  }
+  for (const auto& o : cell_points) {
+    const int ix = cellX(o.x), iy = cellY(o.y);
+    if (ix < 0 || iy < 0 || ix >= n_ || iy >= n_) continue;
+    mark(ix, iy);
     const size_t i = static_cast<size_t>(iy) * n_ + ix;
-    occ_[i] = 1;
-    px_[i] = static_cast<float>(o.x);
-    py_[i] = static_cast<float>(o.y);
+    occ_[i] = 2;  // replaced
+    addToCell(i, o);
   }
   if (static_map) {
     for (int iy = 0; iy < n_; ++iy)
@@ -416,6 +535,67 @@ double LocalCostmap::outlineDistanceOf(double wx, double wy, const TPose2D& pose
   return fp_.contains(rx, ry) ? -d : d;
 }
 
+namespace {
+
+double pointSegmentDistance(double x, double y, double ax, double ay, double bx, double by) {
+  const double dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy;
+  const double u = l2 > 0 ? std::clamp(((x - ax) * dx + (y - ay) * dy) / l2, 0.0, 1.0) : 0.0;
+  return std::hypot(x - ax - u * dx, y - ay - u * dy);
+}
+
+/** Segments (p, q) and (r, s) cross. */
+bool segmentsCross(double px, double py, double qx, double qy, double rx, double ry, double sx,
+                   double sy) {
+  auto side = [](double ax, double ay, double bx, double by, double cx, double cy) {
+    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
+  };
+  const double d1 = side(px, py, qx, qy, rx, ry), d2 = side(px, py, qx, qy, sx, sy);
+  const double d3 = side(rx, ry, sx, sy, px, py), d4 = side(rx, ry, sx, sy, qx, qy);
+  return ((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0));
+}
+
+}  // namespace
+
+double LocalCostmap::shapeDistanceOf(size_t i, const TPose2D& pose, double c, double s) const {
+  return count_[i] >= 3 ? boxDistanceOf(i, pose, c, s) : segmentDistanceOf(i, pose, c, s);
+}
+
+double LocalCostmap::segmentDistanceOf(size_t i, const TPose2D& pose, double c, double s) const {
+  const double ax = px_[i], ay = py_[i], bx = qx_[i], by = qy_[i];
+  if (ax == bx && ay == by) return outlineDistanceOf(ax, ay, pose, c, s);
+  double d = std::min(outlineDistanceOf(ax, ay, pose, c, s), outlineDistanceOf(bx, by, pose, c, s));
+  if (d < 0) return d;
+  // Apart, two shapes are nearest at a vertex of one of them; crossing the
+  // outline is contact.
+  const auto& poly = fp_.polygon;
+  for (size_t k = 0; k < poly.size(); ++k) {
+    const auto& v = poly[k];
+    const auto& w = poly[(k + 1) % poly.size()];
+    const double vx = pose.x + c * v.x - s * v.y, vy = pose.y + s * v.x + c * v.y;
+    const double wx = pose.x + c * w.x - s * w.y, wy = pose.y + s * w.x + c * w.y;
+    if (segmentsCross(ax, ay, bx, by, vx, vy, wx, wy)) return 0;
+    d = std::min(d, pointSegmentDistance(vx, vy, ax, ay, bx, by));
+  }
+  return d;
+}
+
+double LocalCostmap::boxDistanceOf(size_t i, const TPose2D& pose, double c, double s) const {
+  const double x0 = px_[i], y0 = py_[i], x1 = qx_[i], y1 = qy_[i];
+  double d = std::numeric_limits<double>::infinity();
+  for (const double x : {x0, x1})
+    for (const double y : {y0, y1}) d = std::min(d, outlineDistanceOf(x, y, pose, c, s));
+  if (d < 0) return d;
+  // The outline's vertices (world frame) against the box: two convex
+  // shapes apart are nearest at a vertex of one of them.
+  for (const auto& v : fp_.polygon) {
+    const double wx = pose.x + c * v.x - s * v.y, wy = pose.y + s * v.x + c * v.y;
+    const double ex = std::max({x0 - wx, 0.0, wx - x1}), ey = std::max({y0 - wy, 0.0, wy - y1});
+    if (ex == 0 && ey == 0) return 0;  // a vertex in the box
+    d = std::min(d, std::hypot(ex, ey));
+  }
+  return d;
+}
+
 double LocalCostmap::outlineDistanceNear(double wx, double wy, const TPose2D& pose, double c,
                                          double s, int reach) const {
   const int cx = cellX(wx), cy = cellY(wy);
@@ -425,7 +605,7 @@ double LocalCostmap::outlineDistanceNear(double wx, double wy, const TPose2D& po
       const size_t i = static_cast<size_t>(iy) * n_ + ix;
       if (!occ_[i]) continue;
       if (occ_[i] == 1) {
-        best = std::min(best, outlineDistanceOf(px_[i], py_[i], pose, c, s));
+        best = std::min(best, shapeDistanceOf(i, pose, c, s));
         continue;
       }
       // A static map's cell: its centre less half its diagonal (a square).
@@ -459,8 +639,7 @@ bool LocalCostmap::interiorContact(double wx, double wy, const TPose2D& pose, do
   // An obstacle cell under the sample: a static or moving one is inside; a
   // sensed point only if it is (or touches the outline).
   const size_t k = static_cast<size_t>(cellY(wy)) * n_ + cellX(wx);
-  return occ_[k] != 1 || mdist_[k] < res_ * 0.75 ||
-         outlineDistanceOf(px_[k], py_[k], pose, c, s) < padding_;
+  return occ_[k] != 1 || mdist_[k] < res_ * 0.75 || shapeDistanceOf(k, pose, c, s) < padding_;
 }
 
 double LocalCostmap::outlineClearance(const TPose2D& pose) const {
@@ -487,7 +666,7 @@ double LocalCostmap::outlineClearance(const TPose2D& pose) const {
     if (distance(wx, wy) >= res_ * 0.75) continue;
     const size_t k = static_cast<size_t>(cellY(wy)) * n_ + cellX(wx);
     if (occ_[k] != 1 || mdist_[k] < res_ * 0.75) return 0;
-    best = std::min(best, outlineDistanceOf(px_[k], py_[k], pose, c, s));
+    best = std::min(best, shapeDistanceOf(k, pose, c, s));
   }
   return best;
 }

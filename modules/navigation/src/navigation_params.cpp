@@ -98,7 +98,9 @@ const ParamTable<LocalMapParams>& LocalMapParams::table() {
           .real("local_size", &P::local_size, "m", 1, 50, "side of the robot-centred local grid")
           .real("resolution", &P::resolution, "m", 0.01, 0.5, "cell size of the local grid")
           .real("obstacle_persistence", &P::obstacle_persistence, "s", 0, 600,
-                "seen obstacles are remembered this long ([Puente14, App. Table I]: 5)")
+                "seen obstacles are remembered this long where a sensor looks ([Puente14, App. "
+                "Table I]: "
+                "5); out of every sensor's view, until seen again or beyond memory_radius")
           .real("memory_radius", &P::memory_radius, "m", 0.5, 50,
                 "remembered obstacles farther from the robot are dropped")
           .real("cost_decay", &P::cost_decay, "m", 0.01, 5,

@@ -252,9 +252,9 @@ Navigator::Cycle Navigator::cycle(double now) {
   if (last_cycle_ && now > *last_cycle_ && now - *last_cycle_ < 1.0) period_ = now - *last_cycle_;
   last_cycle_ = now;
   memory_.prune(now, {odom_.x, odom_.y});
-  std::vector<TPoint2D> obstacles = memory_.points();
-  obstacles.insert(obstacles.end(), perceived_.begin(), perceived_.end());
-  map_.build({odom_.x, odom_.y}, obstacles);
+  // The perception grid's cells stand alone in theirs: joined to the
+  // lidar's segment of the cell they became a box, grown by the noise.
+  map_.build({odom_.x, odom_.y}, memory_.points(), perceived_);
   // Moving obstacles (people): obstacle cells that were free just before,
   // grown by how far a person walks in predict_time.
   moving_.clear();

@@ -33,6 +33,21 @@ struct WorldScan {
   std::optional<TPoint2D> robot;
 };
 
+/** A segment of the world (its end points; equal for a point). */
+struct Segment {
+  TPoint2D a, b;
+};
+
+/** The segment standing for one scan's hits [begin, end) of `pts` in a
+ *  cell, seen from the sensor at `o`: a range sensor's bearings are precise
+ *  and its ranges noisy, so the range is fitted as linear in the bearing
+ *  (a plane face) by least squares, and the ends are at the hits' extreme
+ *  bearings. A face seen in a cell gives its part of the face, its corner
+ *  kept and the range noise averaged; one hit is itself, two the segment
+ *  between them. */
+Segment fitAlongBearings(const TPoint2D& o, const std::vector<TPoint2D>& pts, size_t begin,
+                         size_t end);
+
 /** Cells already visited by the rays of the current scan, on a small dense
  *  grid around the sensor: near the sensor, a lidar's thousand rays pass the
  *  same cells again and again; each cell is updated once per scan. */
@@ -63,23 +78,46 @@ class ObstacleMemory {
   void add(const WorldScan& scan, double t);
   /** Adds bare obstacle points (no clearing), e.g. from a perception grid. */
   void addPoints(const std::vector<TPoint2D>& points, double t);
-  /** Drops cells older than persistence or outside the radius. */
+  /** Drops cells outside the radius, and cells older than persistence that
+   *  lie where the sensors look (the bearings of the rays of the scans added
+   *  between the last two prunes, from the last one's origin; everywhere
+   *  when no scan was ever added): what no sensor can see now, behind a 270
+   *  deg lidar, is kept until the robot turns to see it or leaves it
+   *  behind. */
   void prune(double now, const TPoint2D& robot);
-  std::vector<TPoint2D> points() const;  ///< one per cell: where in it the obstacle was seen
+  /** Where in each cell the obstacle was seen: the two ends of the segment
+   *  of the hits of the scan that saw it last (fitAlongBearings), one point
+   *  when they coincide. LocalCostmap::build takes two points of a cell as
+   *  the segment between them. */
+  std::vector<TPoint2D> points() const;
   size_t size() const { return cells_.size(); }
   void clear() { cells_.clear(); }
 
  private:
   uint64_t key(double x, double y) const;
   double res_, persistence_, radius_;
-  /** A remembered cell: when it was last seen, and where in it the
-   *  obstacle was (the hit itself, not the cell's centre). */
+  /** A remembered cell: when it was last seen, and the segment of that
+   *  scan's hits in it. One arbitrary hit of a post's face may lie 4 cm from
+   *  the face's corner that the robot will pass; the segment keeps it. */
   struct Cell {
     double t = 0;
-    float x = 0, y = 0;
+    float ax = 0, ay = 0, bx = 0, by = 0;
+  };
+  /** The bearings the scans between two prunes covered, in 1 deg bins
+   *  about the last scan's origin. */
+  struct View {
+    static constexpr int kBins = 360;
+    bool any = false;   ///< a scan was ever added
+    bool next = false;  ///< pruned since: the next scan starts a new view
+    TPoint2D origin;
+    std::vector<uint8_t> bins;
+    void add(const WorldScan& s);
+    int bin(double x, double y) const;
+    bool covers(double x, double y) const;
   };
   std::unordered_map<uint64_t, Cell> cells_;
   ScanCells visited_;
+  View view_;
 };
 
 /** Where free space was seen recently (ray clearing of scans, free cells of
@@ -166,10 +204,19 @@ struct FootprintCheck {
 class LocalCostmap {
  public:
   LocalCostmap(const LocalMapParams& p, const Footprint& footprint);
-  /** Rebuilds around `centre` from obstacle points (world frame) and,
+  /** Rebuilds around `centre` from obstacle points (world frame; contact is
+   *  measured to what the points of a cell stand for: one a point, two the
+   *  segment between them, more their box) and,
    *  optionally, the occupied cells of a static map in the same frame
    *  (cells with occupancy probability above `static_occupied`). */
   void build(const TPoint2D& centre, const std::vector<TPoint2D>& obstacles,
+             const mrpt::maps::COccupancyGridMap2D* static_map = nullptr,
+             double static_occupied = 0.65);
+  /** The same, with `cell_points` each standing alone for its cell (a
+   *  perception grid's obstacle cells, not sensor hits), replacing what was
+   *  put there before. */
+  void build(const TPoint2D& centre, const std::vector<TPoint2D>& obstacles,
+             const std::vector<TPoint2D>& cell_points,
              const mrpt::maps::COccupancyGridMap2D* static_map = nullptr,
              double static_occupied = 0.65);
   /** Grows moving obstacles (world frame) by `inflation` metres on the map
@@ -227,13 +274,25 @@ class LocalCostmap {
                              int reach) const;
   /** The outline distance of one world point (robot frame via c, s). */
   double outlineDistanceOf(double wx, double wy, const TPose2D& pose, double c, double s) const;
+  /** The outline distance of what the sensed points of cell `i` stand for
+   *  (a point, a segment or a box): of its nearest end or corner, or of the
+   *  outline's nearest vertex to it; negative with an end or corner inside,
+   *  0 when it crosses the outline. */
+  double shapeDistanceOf(size_t i, const TPose2D& pose, double c, double s) const;
+  double segmentDistanceOf(size_t i, const TPose2D& pose, double c, double s) const;
+  double boxDistanceOf(size_t i, const TPose2D& pose, double c, double s) const;
+  /** One more sensed point in cell `i`. */
+  void addToCell(size_t i, const TPoint2D& o);
   double res_, far_, decay_, contact_, padding_;
   int n_ = 0;
-  double x0_ = 0, y0_ = 0;      // world coordinates of cell (0, 0)'s lower-left corner
-  std::vector<float> dist_;     // metres, to any obstacle (moving ones grown)
-  std::vector<float> mdist_;    // metres, to the grown moving obstacles only
-  std::vector<uint8_t> occ_;    // 1: a sensed point in the cell, 2: a static map's cell
-  std::vector<float> px_, py_;  // the sensed point of a cell (occ_ 1)
+  double x0_ = 0, y0_ = 0;    // world coordinates of cell (0, 0)'s lower-left corner
+  std::vector<float> dist_;   // metres, to any obstacle (moving ones grown)
+  std::vector<float> mdist_;  // metres, to the grown moving obstacles only
+  std::vector<uint8_t> occ_;  // 1: a sensed point in the cell, 2: a static map's cell
+  // The sensed points of a cell (occ_ 1): one (p = q), a segment p-q (two)
+  // or their box, lower corner p, upper q (three or more, count_ 3).
+  std::vector<float> px_, py_, qx_, qy_;
+  std::vector<uint8_t> count_;
   size_t obstacle_cells_ = 0, moving_cells_ = 0;
   Footprint fp_;
 };

@@ -92,7 +92,7 @@ struct CommitmentParams {
 struct LocalMapParams {
   double local_size = 8.0;            ///< m, side of the robot-centred local grid
   double resolution = 0.05;           ///< m, cell size of the local grid
-  double obstacle_persistence = 5.0;  ///< s, seen obstacles are remembered this long
+  double obstacle_persistence = 5.0;  ///< s, remembered this long where a sensor looks
   double memory_radius = 3.0;         ///< m, remembered obstacles farther away are dropped
   double cost_decay = 0.3;            ///< m, cell cost falls from 100 to 0 over this clearance
   double footprint_padding = 0.02;    ///< m, closer than this to an obstacle counts as contact
