@@ -537,12 +537,6 @@ double LocalCostmap::outlineDistanceOf(double wx, double wy, const TPose2D& pose
 
 namespace {
 
-double pointSegmentDistance(double x, double y, double ax, double ay, double bx, double by) {
-  const double dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy;
-  const double u = l2 > 0 ? std::clamp(((x - ax) * dx + (y - ay) * dy) / l2, 0.0, 1.0) : 0.0;
-  return std::hypot(x - ax - u * dx, y - ay - u * dy);
-}
-
 /** Segments (p, q) and (r, s) cross. */
 bool segmentsCross(double px, double py, double qx, double qy, double rx, double ry, double sx,
                    double sy) {
@@ -574,7 +568,7 @@ double LocalCostmap::segmentDistanceOf(size_t i, const TPose2D& pose, double c, 
     const double vx = pose.x + c * v.x - s * v.y, vy = pose.y + s * v.x + c * v.y;
     const double wx = pose.x + c * w.x - s * w.y, wy = pose.y + s * w.x + c * w.y;
     if (segmentsCross(ax, ay, bx, by, vx, vy, wx, wy)) return 0;
-    d = std::min(d, pointSegmentDistance(vx, vy, ax, ay, bx, by));
+    d = std::min(d, segmentDistance({ax, ay}, {bx, by}, vx, vy));
   }
   return d;
 }
