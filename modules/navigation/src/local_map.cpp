@@ -136,21 +136,19 @@ Segment fitAlongBearings(const TPoint2D& o, const std::vector<TPoint2D>& pts, si
   // Bearings about the first hit's (a cell spans a small angle), ranges.
   const double a0 = std::atan2(pts[begin].y - o.y, pts[begin].x - o.x);
   const double n = static_cast<double>(end - begin);
-  double ma = 0, mr = 0, lo = 0, hi = 0;
+  double sa = 0, sr = 0, saa = 0, sar = 0, lo = 0, hi = 0;
   for (size_t i = begin; i < end; ++i) {
     const double a = std::remainder(std::atan2(pts[i].y - o.y, pts[i].x - o.x) - a0, 2 * M_PI);
-    ma += a, mr += std::hypot(pts[i].x - o.x, pts[i].y - o.y);
+    const double r = std::hypot(pts[i].x - o.x, pts[i].y - o.y);
+    sa += a, sr += r, saa += a * a, sar += a * r;
     lo = std::min(lo, a), hi = std::max(hi, a);
   }
-  ma /= n, mr /= n;
-  double saa = 0, sar = 0;
-  for (size_t i = begin; i < end; ++i) {
-    const double a = std::remainder(std::atan2(pts[i].y - o.y, pts[i].x - o.x) - a0, 2 * M_PI) - ma;
-    saa += a * a, sar += a * (std::hypot(pts[i].x - o.x, pts[i].y - o.y) - mr);
-  }
-  // Range linear in bearing (a plane face), fitted by least squares; the
-  // ends at the extreme bearings.
-  const double slope = saa > 0 ? sar / saa : 0.0;
+  // Range linear in bearing (a plane face), fitted by least squares (the
+  // bearings are small, about the first hit's: one pass of sums is exact
+  // enough); the ends at the extreme bearings.
+  const double ma = sa / n, mr = sr / n;
+  const double vaa = saa - n * ma * ma, var = sar - n * ma * mr;
+  const double slope = vaa > 0 ? var / vaa : 0.0;
   auto at = [&](double a) {
     const double r = mr + slope * (a - ma);
     return TPoint2D{o.x + r * std::cos(a0 + a), o.y + r * std::sin(a0 + a)};
@@ -402,15 +400,16 @@ void LocalCostmap::build(const TPoint2D& c, const std::vector<TPoint2D>& obstacl
   build(c, obstacles, {}, static_map, static_occupied);
 }
 
+void LocalCostmap::setPoint(size_t i, const TPoint2D& o) {
+  occ_[i] = 1;
+  count_[i] = 1;
+  px_[i] = qx_[i] = static_cast<float>(o.x);
+  py_[i] = qy_[i] = static_cast<float>(o.y);
+}
+
 void LocalCostmap::addToCell(size_t i, const TPoint2D& o) {
+  if (occ_[i] != 1) return setPoint(i, o);
   const auto x = static_cast<float>(o.x), y = static_cast<float>(o.y);
-  if (occ_[i] != 1) {  // the first point
-    occ_[i] = 1;
-    count_[i] = 1;
-    px_[i] = qx_[i] = x;
-    py_[i] = qy_[i] = y;
-    return;
-  }
   if (++count_[i] == 2) {  // a segment from the first to this one
     qx_[i] = x, qy_[i] = y;
     return;
@@ -455,9 +454,7 @@ void LocalCostmap::build(const TPoint2D& c, const std::vector<TPoint2D>& obstacl
     const int ix = cellX(o.x), iy = cellY(o.y);
     if (ix < 0 || iy < 0 || ix >= n_ || iy >= n_) continue;
     mark(ix, iy);
-    const size_t i = static_cast<size_t>(iy) * n_ + ix;
-    occ_[i] = 2;  // replaced
-    addToCell(i, o);
+    setPoint(static_cast<size_t>(iy) * n_ + ix, o);
   }
   if (static_map) {
     for (int iy = 0; iy < n_; ++iy)

@@ -281,8 +281,9 @@ class LocalCostmap {
   double shapeDistanceOf(size_t i, const TPose2D& pose, double c, double s) const;
   double segmentDistanceOf(size_t i, const TPose2D& pose, double c, double s) const;
   double boxDistanceOf(size_t i, const TPose2D& pose, double c, double s) const;
-  /** One more sensed point in cell `i`. */
+  /** One more sensed point in cell `i`; setPoint: `o` alone in it. */
   void addToCell(size_t i, const TPoint2D& o);
+  void setPoint(size_t i, const TPoint2D& o);
   double res_, far_, decay_, contact_, padding_;
   int n_ = 0;
   double x0_ = 0, y0_ = 0;    // world coordinates of cell (0, 0)'s lower-left corner
