@@ -280,11 +280,22 @@ bool FreeSpaceHistory::movedIn(double x, double y, double now, double window, do
   if (!recentlyFree(x, y, now, window, min_free, static_memory)) return false;
   int around = 0;
   for (int dy = -1; dy <= 1; ++dy)
-    for (int dx = -1; dx <= 1; ++dx)
-      if ((dx || dy) &&
-          recentlyFree(x + dx * res_, y + dy * res_, now, window, min_free, static_memory))
+    for (int dx = -1; dx <= 1; ++dx) {
+      if (!dx && !dy) continue;
+      const double nx = x + dx * res_, ny = y + dy * res_;
+      if (recentlyFree(nx, ny, now, window, min_free, static_memory))
         ++around;
+      else if (staticHit(nx, ny, now, window))
+        return false;
+    }
   return around >= 7;
+}
+
+bool FreeSpaceHistory::staticHit(double x, double y, double now, double window) const {
+  const auto it = cells_.find(key(x, y));
+  if (it == cells_.end()) return false;
+  const Stretch& c = it->second;
+  return now - c.hit <= window && c.hit >= c.last;
 }
 
 void FreeSpaceHistory::prune(double now, double keep, double keep_hits) {

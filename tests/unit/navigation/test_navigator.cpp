@@ -123,6 +123,40 @@ TEST(FreeSpaceHistoryTest, AThinPostsEdgeCellGrazedFreeIsNotMovingAPersonIs) {
   EXPECT_TRUE(h.recentlyFree(3.0, 0.0, 20.6, 1.5, 0.3, 10.0));
 }
 
+TEST(FreeSpaceHistoryTest, TheCellDiagonalToAPostsCornerIsNotMovingAPersonBesideAWallIs) {
+  const double r = 0.05;
+  // Cell centres: a post's corner cell at (1.025, 0.025), hit all along;
+  // every cell around it seen free for 0.6 s by rays passing the corner;
+  // then range noise puts one hit of the corner in the diagonal cell.
+  FreeSpaceHistory h(r, 5.0);
+  for (int k = 0; k < 6; ++k)
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx)
+        if (dx != 1 || dy != 1) h.markFree(0.975 + dx * r, -0.025 + dy * r, 0.1 * k);
+  for (int k = 0; k <= 6; ++k) h.markHit(1.025, 0.025, 0.1 * k);
+  h.markHit(0.975, -0.025, 0.6);
+  EXPECT_FALSE(h.movedIn(0.975, -0.025, 0.6, 1.5, 0.3)) << "the post's own noise";
+  // The same without the post (its cell seen free as well): moved in.
+  FreeSpaceHistory open(r, 5.0);
+  for (int k = 0; k < 6; ++k)
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx) open.markFree(0.975 + dx * r, -0.025 + dy * r, 0.1 * k);
+  open.markHit(0.975, -0.025, 0.6);
+  EXPECT_TRUE(open.movedIn(0.975, -0.025, 0.6, 1.5, 0.3));
+  // A person beside a wall (cells y < 0 are the wall, hit all along): the
+  // body's cells one cell off the wall moved in, the one against it not.
+  FreeSpaceHistory wall(r, 5.0);
+  for (int k = 0; k < 6; ++k)
+    for (int iy = 0; iy < 6; ++iy)
+      for (int ix = 0; ix < 6; ++ix) wall.markFree(0.025 + ix * r, 0.025 + iy * r, 0.1 * k);
+  for (int k = 0; k <= 6; ++k)
+    for (int ix = 0; ix < 6; ++ix) wall.markHit(0.025 + ix * r, -0.025, 0.1 * k);
+  wall.markHit(0.125, 0.025, 0.6);
+  wall.markHit(0.125, 0.075, 0.6);
+  EXPECT_FALSE(wall.movedIn(0.125, 0.025, 0.6, 1.5, 0.3));
+  EXPECT_TRUE(wall.movedIn(0.125, 0.075, 0.6, 1.5, 0.3));
+}
+
 namespace {
 
 /** A 2D lidar scan at the robot's origin: 181 beams over 180 deg hitting a

@@ -142,12 +142,21 @@ class FreeSpaceHistory {
   bool recentlyFree(double x, double y, double now, double window, double min_free,
                     double static_memory = 0) const;
   /** Something moved into open space: the cell and at least 7 of its 8
-   *  neighbours were recently free (as above). (The edge cell of a static
-   *  obstacle can look free to grazing rays while its neighbours are the
-   *  obstacle's own cells, never seen free; a thin post's cells are all
-   *  grazed from some side, but they were hit before.) */
+   *  neighbours were recently free (as above), and none of them is a
+   *  static obstacle (staticHit). (The edge cell of a static obstacle can
+   *  look free to grazing rays while its neighbours are the obstacle's own
+   *  cells, never seen free; a thin post's cells are all grazed from some
+   *  side, but they were hit before. The cell diagonal to a post's corner
+   *  has one such neighbour only: range noise puts hits of the corner in
+   *  it; at the face of a wall seen at a grazing angle, likewise. A person
+   *  beside a wall is seen moving one cell from it.) */
   bool movedIn(double x, double y, double now, double window, double min_free,
                double static_memory = 0) const;
+  /** The cell was hit within `window` seconds of `now` and not seen free
+   *  since its latest hit, without having been recently free before it
+   *  (recentlyFree false: the caller checks): an obstacle that did not
+   *  move in. */
+  bool staticHit(double x, double y, double now, double window) const;
   /** Drops cells neither seen free for `keep` seconds nor hit for
    *  `keep_hits` seconds. */
   void prune(double now, double keep, double keep_hits = 0);
