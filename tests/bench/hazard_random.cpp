@@ -33,7 +33,9 @@
 //   hazard_random [--profile ini/isr-aiwalker.ini] [--scenes 550] [--seed 1]
 //                 [--decimation 1] [--margin 0.2] [--set section.key=value]...
 //                 [--calib-error 3] [--noise-max 3] [--roll 5] [--list-clear]
-//                 [--only TYPE] [--dump N]
+//                 [--only TYPE] [--dump N] [--slope-bands]
+// --slope-bands: then the false obstacles of the traversable ramps by true
+// slope (1 deg bands, 3-7 deg and 7-max_slope_deg), the cells pooled.
 #include <carenav/common/profile.h>
 #include <carenav/common/robot.h>
 #include <carenav/perception/pipeline.h>
@@ -573,6 +575,39 @@ void dumpScene(const Pipeline& pipe, const FrameResult& fr, const std::vector<La
 
 // ------------------------------------------------------------------ report
 
+/** False obstacles of the traversable ramps pooled over 1 deg bands of
+ *  their true slope (--slope-bands). */
+struct SlopeBand {
+  size_t scenes = 0, blocked = 0, trav = 0, trav_occ = 0;
+};
+using SlopeBands = std::map<int, SlopeBand>;  // key: floor of the slope, deg
+
+void addSlopeBand(const Scene& sc, const SceneScore& s, SlopeBands& bands) {
+  SlopeBand& b = bands[static_cast<int>(std::floor(sc.size))];
+  ++b.scenes;
+  b.blocked += s.blocked;
+  b.trav += s.trav;
+  b.trav_occ += s.trav_occ;
+}
+
+void printSlopeBands(const SlopeBands& bands, double max_slope) {
+  std::printf(
+      "| true slope | scenes | false obstacles (traversable cells seen) | blocked |\n"
+      "|---|---|---|---|\n");
+  SlopeBand low, high;
+  for (const auto& [deg, b] : bands) {
+    std::printf("| %d-%d deg | %zu | %s (%zu) | %zu |\n", deg, deg + 1, b.scenes,
+                pct(b.trav_occ, b.trav).c_str(), b.trav, b.blocked);
+    SlopeBand& sum = deg < 7 ? low : high;
+    sum.scenes += b.scenes, sum.blocked += b.blocked, sum.trav += b.trav;
+    sum.trav_occ += b.trav_occ;
+  }
+  std::printf("| 3-7 deg | %zu | %s (%zu) | %zu |\n", low.scenes,
+              pct(low.trav_occ, low.trav).c_str(), low.trav, low.blocked);
+  std::printf("| 7-%g deg | %zu | %s (%zu) | %zu |\n\n", max_slope, high.scenes,
+              pct(high.trav_occ, high.trav).c_str(), high.trav, high.blocked);
+}
+
 struct TypeTotals {
   size_t scenes = 0, in_range = 0, hazard = 0, hazard_occ = 0, trav = 0, trav_occ = 0;
   size_t blocked = 0, clear = 0, blocked_out = 0, clear_out = 0, over_1pct = 0;
@@ -608,7 +643,7 @@ struct Options {
   int scenes = 550, dec = 1;
   long seed = 1;
   double margin = 0.2;
-  bool list_clear = false;
+  bool list_clear = false, slope_bands = false;
   std::string only;
   MountRanges ranges;
   int dump = -1;  // scene whose grid is printed on stderr
@@ -638,6 +673,8 @@ int parseArgs(int argc, char** argv, Options& o) {
       o.sets.push_back(val());
     else if (k == "--list-clear")
       o.list_clear = true;
+    else if (k == "--slope-bands")
+      o.slope_bands = true;
     else if (k == "--calib-error")
       o.ranges.calib_deg = std::stod(val());
     else if (k == "--noise-max")
@@ -651,7 +688,8 @@ int parseArgs(int argc, char** argv, Options& o) {
     else {
       std::cerr << "usage: hazard_random [--profile P] [--scenes N] [--seed S] [--decimation D] "
                    "[--margin M] [--calib-error DEG] [--noise-max F] [--roll DEG] "
-                   "[--set section.key=value]... [--list-clear] [--only TYPE] [--dump N]\n";
+                   "[--set section.key=value]... [--list-clear] [--only TYPE] [--dump N] "
+                   "[--slope-bands]\n";
       return k == "--help" || k == "-h" ? 0 : 2;
     }
   }
@@ -714,7 +752,8 @@ void addScore(int n, const Scene& sc, const Mount& mt, const Camera& cam, const 
 }
 
 /** Scene n: generated, rendered, perceived and scored. */
-void runScene(int n, const Options& o, const Setup& su, std::vector<TypeTotals>& tt) {
+void runScene(int n, const Options& o, const Setup& su, std::vector<TypeTotals>& tt,
+              SlopeBands& bands) {
   Gen g{std::mt19937_64(static_cast<uint64_t>(o.seed) * 1000003ULL + n)};
   const Type type = static_cast<Type>(n % static_cast<int>(Type::kCount));
   if (!o.only.empty() && o.only != typeName(type)) return;
@@ -734,6 +773,7 @@ void runScene(int n, const Options& o, const Setup& su, std::vector<TypeTotals>&
   const double into = type == Type::RampSteep ? 0.3 : su.cor.into;
   const SceneScore s = scoreScene(pipe.grid(), lab, truth, su.cor, into, su.pp.occupied_threshold);
   addScore(n, sc, mt, su.cam, s, o.list_clear, tt[static_cast<size_t>(type)]);
+  if (type == Type::RampOk) addSlopeBand(sc, s, bands);
 }
 
 }  // namespace
@@ -744,8 +784,10 @@ int main(int argc, char** argv) try {
   if (rc >= 0) return rc;
   const Setup su = loadSetup(o);
   std::vector<TypeTotals> tt(static_cast<size_t>(Type::kCount));
-  for (int n = 0; n < o.scenes; ++n) runScene(n, o, su, tt);
+  SlopeBands bands;
+  for (int n = 0; n < o.scenes; ++n) runScene(n, o, su, tt, bands);
   printTable(tt, o.list_clear);
+  if (o.slope_bands) printSlopeBands(bands, su.pp.max_slope_deg);
   return 0;
 } catch (const std::exception& e) {
   std::cerr << "hazard_random: " << e.what() << "\n";

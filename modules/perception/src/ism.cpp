@@ -250,25 +250,9 @@ size_t rescueSlopes(const ElevationGrid& g, const PerceptionParams& p, const Vox
 
 }  // namespace
 
-namespace {
-
-/** What rule 4 said of a voxel (kept for the integration of the frame). */
-enum SlopeVerdict : uint8_t {
-  kNoVerdict = 0,
-  kSteepWindow = 1,  ///< ground after rules 1-3, 5 and 6, an obstacle by rule 4's window
-  kGentle = 2,       ///< ground, and its slope was judged at most max_slope_deg
-};
-
-/** Per voxel of the last classification on this thread: its SlopeVerdict. */
-std::vector<uint8_t>& slopeVerdicts() {
-  thread_local std::vector<uint8_t> v;
-  return v;
-}
-
-}  // namespace
-
 IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                        const Point3f* o, std::vector<VoxelClass>& classes) {
+                        const Point3f* o, std::vector<VoxelClass>& classes,
+                        std::vector<SlopeVerdict>* verdicts) {
   IsmStats st;
   const int m = g.cells();
   const size_t mm = static_cast<size_t>(m) * m;
@@ -298,13 +282,12 @@ IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const Percep
   gentle.assign(mm, 0);
   st.steep_voxels += markSteepWindows(g, plane, p, o, classes, &decided, &gentle,
                                       rc.floor ? &rc.floor_ref : nullptr);
-  std::vector<uint8_t>& verdict = slopeVerdicts();
-  verdict.assign(mm, kNoVerdict);
+  if (verdicts) verdicts->assign(mm, SlopeVerdict::None);
   for (size_t k = 0; k < mm; ++k) {
-    if (classes[k] == VoxelClass::Obstacle && before_rule4[k] == VoxelClass::Ground)
-      verdict[k] = kSteepWindow;
-    else if (classes[k] == VoxelClass::Ground && gentle[k])
-      verdict[k] = kGentle;
+    if (verdicts && classes[k] == VoxelClass::Obstacle && before_rule4[k] == VoxelClass::Ground)
+      (*verdicts)[k] = SlopeVerdict::SteepWindow;
+    else if (verdicts && classes[k] == VoxelClass::Ground && gentle[k])
+      (*verdicts)[k] = SlopeVerdict::Gentle;
     if (classes[k] == VoxelClass::None) continue;
     ++st.voxels;
     classes[k] == VoxelClass::Obstacle ? ++st.obstacle_voxels : ++st.ground_voxels;
@@ -428,7 +411,7 @@ struct IsmFrame {
   double area, two_s2;
   double ca, sa, rx, ry;  // robot pose in the odometry frame
   float kg;
-  const std::vector<uint8_t>& verdict;  // per voxel its SlopeVerdict
+  const std::vector<SlopeVerdict>& verdict;  // per voxel, from classifyVoxels()
 };
 
 /** Whether the voxel at (x, y) (robot frame) is ground whose own slope was
@@ -439,7 +422,8 @@ struct IsmFrame {
  *  over such a neighbour, which the same test found gentle. */
 bool gentleVerdict(const IsmFrame& f, double x, double y) {
   const int ei = f.g.cellOf(x), ej = f.g.cellOf(y);
-  return f.g.inside(ei, ej) && f.verdict[static_cast<size_t>(ei) * f.g.cells() + ej] == kGentle;
+  return f.g.inside(ei, ej) &&
+         f.verdict[static_cast<size_t>(ei) * f.g.cells() + ej] == SlopeVerdict::Gentle;
 }
 
 /** The rays of voxel k into the grid: [Garrote17, Eq. 5] from the voxel back
@@ -456,7 +440,7 @@ void integrateVoxel(const IsmFrame& f, int32_t k) {
   const int i = k / m, j = k % m;
   const ElevationCell& c = g.at(i, j);
   const bool obstacle = vc == VoxelClass::Obstacle;
-  const bool steep_window = obstacle && f.verdict[k] == kSteepWindow;
+  const bool steep_window = obstacle && f.verdict[k] == SlopeVerdict::SteepWindow;
   const double x = g.centre(i), y = g.centre(j);
   const double rho = obstacle ? voxelDensity(c, f.area, f.p) : 0.0;
   const float amp = static_cast<float>(std::max(rho, 0.5));
@@ -516,7 +500,8 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
                       const Point3f* sensor_origin) {
   thread_local std::vector<VoxelClass> local;
   std::vector<VoxelClass>& classes = classes_out ? *classes_out : local;
-  const IsmStats st = classifyVoxels(g, plane, p, sensor_origin, classes);
+  thread_local std::vector<SlopeVerdict> verdicts;
+  const IsmStats st = classifyVoxels(g, plane, p, sensor_origin, classes, &verdicts);
   const double two_s2 = 2.0 * p.sigma2;
   thread_local IsmTables lut;
   lut.prepare(static_cast<size_t>(grid.cells() * grid.resolution() * 1.5 / IsmTables::kStep) + 2,
@@ -535,7 +520,7 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
                        grid.robot().x(),
                        grid.robot().y(),
                        static_cast<float>(p.k_g),
-                       slopeVerdicts()};
+                       verdicts};
   // Voxels from the farthest to the nearest.
   for (const int32_t k : farthestFirst(g))
     if (classes[k] != VoxelClass::None) integrateVoxel(frame, k);

@@ -140,19 +140,11 @@ struct Chunk {
   int32_t flag[kChunk];  ///< 0: skip; 1: in a band and finite; 2: that, and on an axis
 };
 
-/** Per point j of pts[0, m): bin = its bearing bin, kSkip when invalid (validPoint) or in no
- *  band, kExact when within `edge` bins of a bin edge or at x = y = 0 (then possibly (0, 0, 0),
- *  invalid). The bearing u = (atan2(y, x) + pi) / bin from an odd degree-15 polynomial for
- *  atan on [0, 1] (least-squares fit with Lawson weights, no second division as a range reduction
- *  would need), the quadrant by arithmetic blends (a select would keep the compiler from
- *  vectorising under trapping math). Error of u against atan2f, measured over 2e7 points for n =
- * 120...7200: < 1.3e-6 rad, < 2.1e-7 n bins; bounded here by 5e-7 n. */
-CARENAV_VECTOR_CLONES void chunkBins(const Point3f* pts, size_t m, const std::vector<ZBand>& bands,
-                                     float inv_bin, float edge, int32_t n, Chunk& ch) {
-  constexpr float kPi = 3.14159265358979f;
-  constexpr float kAtan[8] = {9.9999933558e-01f,  -3.3329860790e-01f, 1.9946565687e-01f,
-                              -1.3908629648e-01f, 9.6421974487e-02f,  -5.5912327205e-02f,
-                              2.1862957577e-02f,  -4.0545670086e-03f};
+/** Copies pts[0, m) into the chunk's arrays and flags the points in a band (flag 1); returns
+ *  0 when none is (the chunk adds nothing to the scan: a fifth of the chunks of the bench's
+ *  stairs frame after FSPF+). */
+CARENAV_VECTOR_CLONES int32_t chunkFlags(const Point3f* pts, size_t m,
+                                         const std::vector<ZBand>& bands, Chunk& ch) {
   for (size_t j = 0; j < m; ++j) {
     ch.x[j] = pts[j].x;
     ch.y[j] = pts[j].y;
@@ -161,6 +153,23 @@ CARENAV_VECTOR_CLONES void chunkBins(const Point3f* pts, size_t m, const std::ve
   }
   for (const ZBand& b : bands)  // in a band: |z| < 1e6
     for (size_t j = 0; j < m; ++j) ch.flag[j] |= (ch.z[j] >= b.lo) & (ch.z[j] <= b.hi);
+  int32_t any = 0;
+  for (size_t j = 0; j < m; ++j) any |= ch.flag[j];
+  return any;
+}
+
+/** Per point j of the chunk (its arrays and flags filled by chunkFlags()): bin = its bearing bin,
+ * kSkip when invalid (validPoint) or in no band, kExact when within `edge` bins of a bin edge or at
+ * x = y = 0 (then possibly (0, 0, 0), invalid). The bearing u = (atan2(y, x) + pi) / bin from an
+ * odd degree-15 polynomial for atan on [0, 1] (least-squares fit with Lawson weights, no second
+ * division as a range reduction would need), the quadrant by arithmetic blends (a select would keep
+ * the compiler from vectorising under trapping math). Error of u against atan2f, measured over 2e7
+ * points for n = 120...7200: < 1.3e-6 rad, < 2.1e-7 n bins; bounded here by 5e-7 n. */
+CARENAV_VECTOR_CLONES void chunkBins(size_t m, float inv_bin, float edge, int32_t n, Chunk& ch) {
+  constexpr float kPi = 3.14159265358979f;
+  constexpr float kAtan[8] = {9.9999933558e-01f,  -3.3329860790e-01f, 1.9946565687e-01f,
+                              -1.3908629648e-01f, 9.6421974487e-02f,  -5.5912327205e-02f,
+                              2.1862957577e-02f,  -4.0545670086e-03f};
   for (size_t j = 0; j < m; ++j) {
     const float x = ch.x[j], y = ch.y[j];
     const float ax = std::abs(x), ay = std::abs(y);
@@ -188,32 +197,26 @@ CARENAV_VECTOR_CLONES void chunkBins(const Point3f* pts, size_t m, const std::ve
   }
 }
 
-/** Per-bin minimum of r2 over one chunk; the running minimum stays in registers while the
- *  points (neighbouring pixels of a plane) stay in one bin. False: a point at x = y = 0. */
+/** Per-bin minimum of r2 over one chunk, the earlier point on a tie: per point a load, a
+ *  compare and two selected stores, no branch on a change of bin (in a filtered cloud the bin
+ *  changes every few points; a running minimum kept in registers until the bin changed was
+ *  slower on the bench frames). False: a point at x = y = 0. */
 bool chunkMinimum(const Chunk& ch, size_t m, size_t i0, size_t n, double* best2, long* best) {
-  long cur = -1, cur_i = -1;
-  double cur2 = 0;
   for (size_t j = 0; j < m; ++j) {
     long b = ch.bin[j];
-    if (b == kSkip) continue;
-    if (b == kExact) {
+    if (b < 0) {
+      if (b == kSkip) continue;
       if (ch.x[j] == 0 && ch.y[j] == 0) {
         if (ch.z[j] == 0) continue;  // (0, 0, 0): invalid
         return false;
       }
       b = static_cast<long>(atanBin(ch.x[j], ch.y[j], n));
     }
-    if (b != cur) {
-      if (cur >= 0) best2[cur] = cur2, best[cur] = cur_i;
-      cur = b;
-      cur2 = best2[b];
-      cur_i = best[b];
-    }
-    const bool nearer = ch.r2[j] < cur2;  // selects, not a branch: which point wins is data
-    cur_i = nearer ? static_cast<long>(i0 + j) : cur_i;
-    cur2 = nearer ? ch.r2[j] : cur2;
+    const double o = best2[b];
+    const bool nearer = ch.r2[j] < o;
+    best2[b] = nearer ? ch.r2[j] : o;
+    best[b] = nearer ? static_cast<long>(i0 + j) : best[b];
   }
-  if (cur >= 0) best2[cur] = cur2, best[cur] = cur_i;
   return true;
 }
 }  // namespace
@@ -234,7 +237,8 @@ mrpt::obs::CObservation2DRangeScan kinectObstacleScan(const Cloud& c, const Perc
   thread_local Chunk ch;
   for (size_t i0 = 0, m = c.points.size(); i0 < m; i0 += kChunk) {
     const size_t mc = std::min(kChunk, m - i0);
-    chunkBins(pts + i0, mc, w.bands, inv_bin, edge, static_cast<int32_t>(n), ch);
+    if (!chunkFlags(pts + i0, mc, w.bands, ch)) continue;  // no point in a band
+    chunkBins(mc, inv_bin, edge, static_cast<int32_t>(n), ch);
     if (!chunkMinimum(ch, mc, i0, n, w.best2.data(), w.best.data()))  // x = y = 0 in a band
       return makeScan(kosPerLevel(c, p, n), 0.0, p.depth_max, "KOS");
   }

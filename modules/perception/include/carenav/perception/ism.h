@@ -17,6 +17,15 @@ namespace carenav::perception {
 /** What the ISM made of one elevation voxel (for tests and rendering). */
 enum class VoxelClass : uint8_t { None = 0, Ground, Obstacle };
 
+/** What the slope rules said of one elevation voxel (classifyVoxels()), for
+ *  the integration of the frame (integrateIsm()). */
+enum class SlopeVerdict : uint8_t {
+  None = 0,
+  SteepWindow,  ///< ground after rules 1-3, 5 and 6, an obstacle by rule 4's window
+  Gentle,       ///< ground, its slope judged at most max_slope_deg (rule 4's window or a
+                ///< gentle region of rule 6)
+};
+
 /** Noise-aware voxel classification (docs/perceive.md "Noise-aware voxel
  *  rules"), one class per elevation cell (None: no data):
  *  1. distance rule ([Garrote17]): d = max distance of z+ and z- to the plane; the
@@ -32,14 +41,16 @@ enum class VoxelClass : uint8_t { None = 0, Ground, Obstacle };
  *  then rule 5 (rescueGentleGround), rule 6 (ramps by region: smooth regions
  *  judged by their own plane fit, src/slope_regions.cpp) and rule 4
  *  (markSteepGround) on the voxels rule 6 left to it.
- *  `sensor_origin` null: no noise model (sigma_v = 0). */
+ *  `sensor_origin` null: no noise model (sigma_v = 0). `verdicts` (when
+ *  given) receives one SlopeVerdict per elevation cell. */
 struct IsmStats {
   size_t voxels = 0, obstacle_voxels = 0, ground_voxels = 0;
   size_t rescued_voxels = 0;  ///< off-plane voxels kept as ground by rule 3
   size_t steep_voxels = 0;    ///< ground voxels on slopes steeper than max_slope_deg (rule 4)
 };
 IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
-                        const Point3f* sensor_origin, std::vector<VoxelClass>& classes);
+                        const Point3f* sensor_origin, std::vector<VoxelClass>& classes,
+                        std::vector<SlopeVerdict>* verdicts = nullptr);
 
 /** Vertical noise sigma of a voxel at robot-frame (x, y, z) seen from `o`
  *  (0 without a noise model). */
