@@ -239,6 +239,7 @@ void FreeSpaceHistory::markFree(double x, double y, double t) {
 void FreeSpaceHistory::markHit(double x, double y, double t) {
   if (!std::isfinite(x) || !std::isfinite(y)) return;
   Stretch& c = cells_[key(x, y)];
+  if (c.hit < c.last) c.hit_since = t;  // seen free since its last hit: a new run of hits
   c.hit = std::max(c.hit, t);
 }
 
@@ -278,6 +279,7 @@ bool FreeSpaceHistory::recentlyFree(double x, double y, double now, double windo
 bool FreeSpaceHistory::movedIn(double x, double y, double now, double window, double min_free,
                                double static_memory) const {
   if (!recentlyFree(x, y, now, window, min_free, static_memory)) return false;
+  const double since = cells_.find(key(x, y))->second.first;
   int around = 0;
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx) {
@@ -285,17 +287,18 @@ bool FreeSpaceHistory::movedIn(double x, double y, double now, double window, do
       const double nx = x + dx * res_, ny = y + dy * res_;
       if (recentlyFree(nx, ny, now, window, min_free, static_memory))
         ++around;
-      else if (staticHit(nx, ny, now, window))
+      else if (staticHit(nx, ny, now, window, since))
         return false;
     }
   return around >= 7;
 }
 
-bool FreeSpaceHistory::staticHit(double x, double y, double now, double window) const {
+bool FreeSpaceHistory::staticHit(double x, double y, double now, double window,
+                                 double since) const {
   const auto it = cells_.find(key(x, y));
   if (it == cells_.end()) return false;
   const Stretch& c = it->second;
-  return now - c.hit <= window && c.hit >= c.last;
+  return now - c.hit <= window && c.hit >= c.last && c.hit_since <= since;
 }
 
 void FreeSpaceHistory::prune(double now, double keep, double keep_hits) {

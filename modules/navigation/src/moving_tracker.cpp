@@ -50,6 +50,7 @@ void MovingTracker::update(const std::vector<TPoint2D>& moved_in, double t) {
     for (size_t i : c)
       m.radius = std::max(m.radius,
                           std::hypot(moved_in[i].x - m.centroid.x, moved_in[i].y - m.centroid.y));
+    if (m.radius > p_.max_radius) continue;  // not a person
     m.seen = t;
     m.sightings = 1;
     // The nearest track, by its constant-velocity prediction while fresh,

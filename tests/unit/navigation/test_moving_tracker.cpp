@@ -81,6 +81,24 @@ TEST(MovingTracker, StandingClusterHasNoLaneAndOldTracksAreDropped) {
   EXPECT_TRUE(tr.tracks().empty()) << "unseen for longer than keep";
 }
 
+TEST(MovingTracker, AClusterWiderThanAPersonIsNotTracked) {
+  // A wall's face flickering under grazing rays: moved-in cells every 5 cm
+  // along 3 m, sliding along the wall as the robot drives (it "walks").
+  MovingTracker tr;
+  for (int k = 0; k <= 20; ++k) {
+    std::vector<TPoint2D> face;
+    for (double x = 0; x <= 3.0; x += 0.05) face.push_back({x + 0.05 * k, 0.1});
+    tr.update(face, 0.1 * k);
+  }
+  EXPECT_TRUE(tr.tracks().empty());
+  tr.update({}, 3.0);
+  EXPECT_TRUE(tr.hiddenRegions(3.0, 0.05).empty()) << "no hidden region of the wall's size";
+  // A person beside it is tracked.
+  std::mt19937 rng(2);
+  for (int k = 0; k <= 10; ++k) tr.update(personFront(3.0, 1.0 - 0.05 * k, rng), 3.1 + 0.1 * k);
+  EXPECT_EQ(tr.tracks().size(), 1u);
+}
+
 TEST(MovingTracker, APersonWhoWalkedOutOfSightMayBeNearWhereSeenLast) {
   std::mt19937 rng(9);
   MovingTracker tr;

@@ -155,6 +155,18 @@ TEST(FreeSpaceHistoryTest, TheCellDiagonalToAPostsCornerIsNotMovingAPersonBeside
   wall.markHit(0.125, 0.075, 0.6);
   EXPECT_FALSE(wall.movedIn(0.125, 0.025, 0.6, 1.5, 0.3));
   EXPECT_TRUE(wall.movedIn(0.125, 0.075, 0.6, 1.5, 0.3));
+  // A person walking in: the cell behind its new front was free for 1 s,
+  // then flickered (hit, free once, hit) under the body's jitter; it was hit
+  // only after the new front cell was seen free: no static obstacle.
+  FreeSpaceHistory walk(r, 5.0);
+  for (int k = 0; k <= 10; ++k)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) walk.markFree(1.025 + dx * r, 0.025 + dy * r, 0.1 * k);
+  walk.markHit(1.075, 0.025, 1.05);
+  walk.markFree(1.075, 0.025, 1.1);
+  walk.markHit(1.075, 0.025, 1.15);
+  walk.markHit(1.025, 0.025, 1.2);
+  EXPECT_TRUE(walk.movedIn(1.025, 0.025, 1.2, 1.5, 0.3));
 }
 
 namespace {

@@ -152,11 +152,12 @@ class FreeSpaceHistory {
    *  beside a wall is seen moving one cell from it.) */
   bool movedIn(double x, double y, double now, double window, double min_free,
                double static_memory = 0) const;
-  /** The cell was hit within `window` seconds of `now` and not seen free
-   *  since its latest hit, without having been recently free before it
-   *  (recentlyFree false: the caller checks): an obstacle that did not
-   *  move in. */
-  bool staticHit(double x, double y, double now, double window) const;
+  /** The cell was hit within `window` seconds of `now`, not seen free
+   *  since, and its hits began no later than `since` (the start of a
+   *  neighbour's free stretch): an obstacle that was there while the
+   *  neighbour was seen free, not one that moved in (a walking person's
+   *  cells were hit only after the cells ahead of it were seen free). */
+  bool staticHit(double x, double y, double now, double window, double since) const;
   /** Drops cells neither seen free for `keep` seconds nor hit for
    *  `keep_hits` seconds. */
   void prune(double now, double keep, double keep_hits = 0);
@@ -170,6 +171,7 @@ class FreeSpaceHistory {
     double first = -1e300, last = -1e300;  ///< the latest stretch of being seen free
     double hit = -1e300;                   ///< last hit
     double hit_before = -1e300;            ///< last hit before the stretch began
+    double hit_since = -1e300;             ///< first hit since the cell was last seen free
   };
   std::unordered_map<uint64_t, Stretch> cells_;
 };

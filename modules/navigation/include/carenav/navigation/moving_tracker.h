@@ -26,6 +26,11 @@ struct MovingTrackerParams {
   double hidden_speed = 0.5;   ///< m/s, a hidden person may be this much farther each second
   double hidden_growth = 0.5;  ///< m, ... up to this much
   double window = 1.5;  ///< s, the velocity is the least-squares slope of the centroids this long
+  /** m, a cluster spread farther than this from its centroid is no person
+   *  (a wall's face flickering under grazing rays, chained along metres):
+   *  it is not tracked, so it neither sweeps a lane nor leaves a hidden
+   *  region the size of its spread. A person's body fits well within. */
+  double max_radius = 0.6;
 };
 
 /** One tracked moving obstacle (odometry frame). */
