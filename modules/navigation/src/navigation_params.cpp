@@ -1,5 +1,4 @@
 #include <carenav/common/profile.h>
-#include <carenav/navigation/failed_places.h>
 #include <carenav/navigation/mrpt_ptg.h>
 #include <carenav/navigation/navigation_params.h>
 #include <carenav/navigation/recovery.h>
@@ -218,9 +217,6 @@ void registerProfileSections() {
       RecoveryParams::table(), "nav.recovery",
       "recovery behaviours of goal robots: back out along the recent path, turn, wait, "
       "replan, give up"));
-  reg.add(SectionSchema::of(FailedPlacesParams::table(), "nav.failed_places",
-                            "places where recoveries started again and again: later routes "
-                            "keep clear of them"));
 }
 
 }  // namespace carenav::navigation

@@ -53,8 +53,7 @@ NavigationSession::NavigationSession(SessionSetup setup)
       nav_(s_.nav, s_.robot),
       fp_(s_.robot.footprint, s_.nav.resolution),
       route_nav_(s_.nav),
-      replanner_(s_.control_rate),
-      failed_(s_.profile.section<FailedPlacesParams>("nav.failed_places"), fp_) {
+      replanner_(s_.control_rate) {
   const auto locp = s_.profile.section<localization::LocalizationParams>("localization");
   const auto percp = s_.profile.section<perception::PerceptionParams>("perception");
   nav_.setRecoveryParams(s_.profile.section<RecoveryParams>("nav.recovery"));
@@ -92,7 +91,6 @@ bool NavigationSession::setGoals(std::vector<SessionGoal> goals, bool patrol, do
   leg_timeout_ = leg_timeout;
   goal_ = goals_.front().pose;
   m_.goal_name = goals_.front().label;
-  failed_.clear();
   if (!s_.map) return false;
   gp_ = std::make_unique<GlobalPlanner>(*s_.map, fp_.inscribed, s_.nav);
   route_origin_ = from;
@@ -147,7 +145,6 @@ void NavigationSession::nextLeg(bool reported, const TPoint2D& where, double now
   }
   leg_ = (leg_ + 1) % goals_.size();
   goal_ = goals_[leg_].pose;
-  failed_.clear();
   leg_t0_ = now;
   const TPose2D mp = nav_.mapPose();
   if (gp_) planRoute({mp.x, mp.y});  // none: the replanner keeps trying; the leg times out
@@ -181,7 +178,6 @@ NavigationSession::Step NavigationSession::cycle(double t, const std::optional<T
     st.end = *end;
     return st;
   }
-  noteRecovery(st.cycle);
   const double replan0 = threadCpuMs();
   replan(k, st.cycle.replan);
   work_ms_ += threadCpuMs() - replan0;
@@ -213,14 +209,6 @@ std::optional<SessionEnd> NavigationSession::goalCheck(double t, const Navigator
   return std::nullopt;
 }
 
-// A recovery starts: its place is remembered (map frame), and a place of
-// repeated recoveries is kept clear of by later routes.
-void NavigationSession::noteRecovery(const Navigator::Cycle& c) {
-  const bool now = !c.recovery.empty();
-  if (now && !in_recovery_ && goal_) failed_.add(nav_.mapPose());
-  in_recovery_ = now;
-}
-
 // Replan from the localised pose with the obstacles the robot has seen
 // marked on the map (boxes and people the map does not show; when that
 // finds no route, the last one stays). A walker's scripted user walks the
@@ -230,11 +218,9 @@ void NavigationSession::replan(size_t k, bool recovery_ended) {
   const bool people = !nav_.predicted().empty();
   if (!recovery_ended && !replanner_.due(k, people)) return;
   const TPose2D mp = nav_.mapPose();
-  std::vector<TPoint2D> seen = nav_.obstaclesInMap();
-  const auto avoided = failed_.avoidedPoints(s_.map->getResolution());
-  seen.insert(seen.end(), avoided.begin(), avoided.end());
-  if (auto r2 = replanner_.step(people, *s_.map, seen, {mp.x, mp.y}, {goal_->x, goal_->y}, route_,
-                                fp_.inscribed, fp_.circumscribed + 0.2, route_nav_)) {
+  if (auto r2 = replanner_.step(people, *s_.map, nav_.obstaclesInMap(), {mp.x, mp.y},
+                                {goal_->x, goal_->y}, route_, fp_.inscribed,
+                                fp_.circumscribed + 0.2, route_nav_)) {
     route_ = r2;
     route_start_ = {mp.x, mp.y};
     nav_.setRoute(routePoints(), *goal_);

@@ -11,7 +11,6 @@
 #include <carenav/common/robot.h>
 #include <carenav/common/run_health.h>
 #include <carenav/io/map_render.h>
-#include <carenav/navigation/failed_places.h>
 #include <carenav/navigation/global_planner.h>
 #include <carenav/navigation/navigator.h>
 #include <carenav/runtime/intent.h>
@@ -156,7 +155,6 @@ class NavigationSession {
   void nextLeg(bool reported, const TPoint2D& where, double now);
   void planRoute(const TPoint2D& from);
   void replan(size_t k, bool recovery_ended);
-  void noteRecovery(const Navigator::Cycle& c);
   void depthFrame(const mrpt::obs::CObservation& obs, const TPose2D& odo, double t);
   void scan2d(const mrpt::obs::CObservation::Ptr& obs, const TPose2D& odo, double t);
   void record(double t, const Navigator::Cycle& c, const std::optional<Truth>& truth, double ms);
@@ -185,8 +183,6 @@ class NavigationSession {
   NavigationParams route_nav_;  ///< the route's clearance (narrowed when nothing else fits)
   std::unique_ptr<GlobalPlanner> gp_;
   RouteReplanner replanner_;
-  FailedPlaces failed_;       ///< where recoveries started (the route keeps clear of repeats)
-  bool in_recovery_ = false;  ///< a recovery was under way at the last cycle
   // sensors
   std::unique_ptr<localization::Localizer> loc_;
   std::string loc_sensor_;
