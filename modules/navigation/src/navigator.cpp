@@ -260,7 +260,11 @@ Navigator::Cycle Navigator::cycle(double now) {
   moving_.clear();
   const double grow = p_.predict_speed * p_.predict_time;
   if (grow > 0) {
-    free_history_.prune(now, p_.dynamic_window + 1.0, p_.static_memory);
+    // Hit cells are kept for dynamic_window: movedIn() asks whether a
+    // neighbour was hit that recently (a post's cell that no ray passed is
+    // never seen free and was dropped at once).
+    free_history_.prune(now, p_.dynamic_window + 1.0,
+                        std::max(p_.static_memory, p_.dynamic_window));
     // Only what locates its obstacles precisely and is current: the lidar
     // hits and the depth frames' obstacle cells since the last cycle (not
     // the perception grid's fused cells, whose edges grow as a static box

@@ -136,6 +136,11 @@ TEST(FreeSpaceHistoryTest, TheCellDiagonalToAPostsCornerIsNotMovingAPersonBeside
   for (int k = 0; k <= 6; ++k) h.markHit(1.025, 0.025, 0.1 * k);
   h.markHit(0.975, -0.025, 0.6);
   EXPECT_FALSE(h.movedIn(0.975, -0.025, 0.6, 1.5, 0.3)) << "the post's own noise";
+  // Pruned as the Navigator prunes (hits kept for the window), the corner
+  // cell, never seen free and last hit 0.1 s ago, is still there a cycle later.
+  h.prune(0.7, 2.5, 1.5);
+  h.markHit(0.975, -0.025, 0.7);
+  EXPECT_FALSE(h.movedIn(0.975, -0.025, 0.7, 1.5, 0.3)) << "after a prune";
   // The same without the post (its cell seen free as well): moved in.
   FreeSpaceHistory open(r, 5.0);
   for (int k = 0; k < 6; ++k)
