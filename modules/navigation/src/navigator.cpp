@@ -231,9 +231,16 @@ std::optional<double> Navigator::intentDeviation(const Twist& user, const Twist&
   const Twist uc{std::clamp(user.v, robot_.v_min, robot_.v_max),
                  std::clamp(user.w, -robot_.w_max, robot_.w_max)};
   if (std::abs(uc.v) < p_.intent_deadband) return std::nullopt;
-  const Trajectory ut = rollout(map_, odom_, uc, p_.sim_time, p_.sim_step, p_.clearance_influence);
+  const Trajectory ut =
+      rollout(map_, cycle_pose_, uc, p_.sim_time, p_.sim_step, p_.clearance_influence);
   if (!ut.admissible()) return std::nullopt;
   return std::hypot(cmd.v - uc.v, cmd.w - uc.w);
+}
+
+TPose2D Navigator::poseAt(double now) const {
+  if (!odom_t_) return odom_;
+  const double age = std::clamp(now - *odom_t_, 0.0, p_.odom_timeout);
+  return integrateArc(odom_, measured_.v, measured_.w, age);
 }
 
 MotionState Navigator::motionState() const {
@@ -251,10 +258,12 @@ Navigator::Cycle Navigator::cycle(double now) {
   Cycle c;
   if (last_cycle_ && now > *last_cycle_ && now - *last_cycle_ < 1.0) period_ = now - *last_cycle_;
   last_cycle_ = now;
-  memory_.prune(now, {odom_.x, odom_.y});
+  const TPose2D pose = planner_->usesMotionState() ? poseAt(now) : odom_;
+  cycle_pose_ = pose;
+  memory_.prune(now, {pose.x, pose.y});
   // The perception grid's cells stand alone in theirs: joined to the
   // lidar's segment of the cell they became a box, grown by the noise.
-  map_.build({odom_.x, odom_.y}, memory_.points(), perceived_);
+  map_.build({pose.x, pose.y}, memory_.points(), perceived_);
   // Moving obstacles (people): obstacle cells that were free just before,
   // grown by how far a person walks in predict_time.
   moving_.clear();
@@ -300,11 +309,11 @@ Navigator::Cycle Navigator::cycle(double now) {
     map_.addMoving(all, grow);
   }
   c.obstacles = memory_.size();
-  c.clearance = map_.check(odom_, 2.0).clearance;
+  c.clearance = map_.check(pose, 2.0).clearance;
 
   PlannerInput in;
   in.t = now;
-  in.pose = odom_;
+  in.pose = pose;
   in.current = measured_;
   if (planner_->usesMotionState()) in.motion = motionState();
   in.map = &map_;
@@ -320,9 +329,9 @@ Navigator::Cycle Navigator::cycle(double now) {
     c.goal_reached = goal_ && c.plan.ok && c.plan.status == PlanStatus::GoalReached;
     // Recovery behaviours (goal robots): boxed in or no progress.
     if (goal_ && !planner_->needsUserIntent()) {
-      recovery_.recordPose(odom_);
+      recovery_.recordPose(pose);
       const bool blocked = !c.plan.ok || blocked_;
-      if (auto r = recovery_.step(now, in, c.plan, blocked, routeLeft(in.path, odom_.x, odom_.y))) {
+      if (auto r = recovery_.step(now, in, c.plan, blocked, routeLeft(in.path, pose.x, pose.y))) {
         c.plan = *r;
         c.recovery = Recovery::phaseName(recovery_.phase());
         c.gave_up = recovery_.gaveUp();
@@ -339,7 +348,7 @@ Navigator::Cycle Navigator::cycle(double now) {
   s.last_intent_time = intent_t_;
   s.user = user_;
   s.plan = c.plan;
-  s.pose = odom_;
+  s.pose = pose;
   s.map = &map_;
   s.motion = in.motion;
   c.decision = supervisor_.apply(s);

@@ -85,6 +85,25 @@ TEST(Navigator, AWalkerIgnoresTheRotateRequest) {
   EXPECT_GT(c.decision.cmd.v, 0.0) << "the user drives a walker: " << c.plan.note;
 }
 
+TEST(Navigator, TheCyclesPoseIsTheOdometryCarriedForwardToItsTime) {
+  // Odometry read 0.1 s before the cycle (the sensors' last frame) while
+  // driving at 0.4 m/s: the robot is 4 cm nearer to the wall ahead by now.
+  std::vector<TPoint2D> wall;
+  for (double y = -1; y <= 1; y += 0.02) wall.push_back({1.5, y});
+  auto clearanceAt = [&](double now) {
+    Navigator n(goalParams(), longRobot());
+    n.setOdometry({0, 0, 0}, {0.4, 0}, 1.0);
+    n.addObstaclePoints(wall, 1.0);
+    return n.cycle(now).clearance;
+  };
+  // (The clearance is measured on the 5 cm grid: 0.25 s, 10 cm.)
+  const double at_once = clearanceAt(1.0), later = clearanceAt(1.25);
+  EXPECT_NEAR(at_once, 1.0, 0.03);
+  EXPECT_NEAR(at_once - later, 0.1, 0.03);
+  // Never carried forward past odom_timeout: the supervisor stops then.
+  EXPECT_NEAR(at_once - clearanceAt(3.0), 0.4 * NavigationParams{}.odom_timeout, 0.06);
+}
+
 // ------------------------------------------------- moving obstacles (people)
 
 TEST(FreeSpaceHistoryTest, AnObstacleWhereFreeSpaceWasIsMovingAWallIsNot) {

@@ -112,6 +112,15 @@ class Navigator {
   /** The robot's dynamics this cycle: measured velocity, last command,
    *  command_latency and the control period. */
   MotionState motionState() const;
+  /** The robot's pose (odometry frame) at the cycle's time `now`: the
+   *  latest odometry is read at its own time stamp, up to a control period
+   *  earlier (the sensors' last frame), and the robot kept moving at its
+   *  measured velocity meanwhile (0.2 m in 0.1 s at 2 m/s). At most
+   *  odom_timeout seconds ahead (older odometry: the supervisor stops).
+   *  The cycle of a planner that rolls out the robot's dynamics
+   *  (usesMotionState: the command's latency, the ramps) starts from it;
+   *  one that takes a command at once (user-intent-dwa) from the odometry. */
+  TPose2D poseAt(double now) const;
   TPoint2D mapToOdom(const TPoint2D& p) const;
   TPose2D mapToOdom(const TPose2D& p) const;
 
@@ -129,6 +138,7 @@ class Navigator {
   std::vector<TPoint2D> fresh_hits_;        // lidar hits since the last cycle (odometry frame)
   std::vector<TPoint2D> fresh_depth_hits_;  // depth frames' obstacle cells since the last cycle
   TPose2D odom_;
+  TPose2D cycle_pose_;  // poseAt() of the last cycle
   Twist measured_;
   std::optional<double> odom_t_, scan_t_, intent_t_;
   std::optional<Twist> user_;
