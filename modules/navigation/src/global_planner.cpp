@@ -174,6 +174,8 @@ std::optional<std::vector<Cell>> aStarCells(const SearchGrid& g, Cell start, Cel
 struct Passage {
   size_t centre;
   TPoint2D before, mid, after;
+  TPoint2D axis;     ///< unit vector across the passage, in the direction of travel
+  double spare = 0;  ///< m, how far off the axis the robot's centre may cross the throat
 };
 
 /** Of 16 directions, the one along which the clearance around `c` rises most
@@ -197,7 +199,7 @@ std::pair<TPoint2D, double> crossingAxis(const GlobalPlanner& planner, const TPo
 // goals at doorways, reached with in-place turns).
 std::vector<Passage> findPassages(const GlobalPlanner& planner, const std::vector<Cell>& cells,
                                   const std::vector<TPoint2D>& pts, const std::vector<float>& dist,
-                                  int nx, double narrow, double approach) {
+                                  int nx, double radius, double narrow, double approach) {
   std::vector<Passage> passages;
   auto clear = [&](size_t k) {
     return dist[static_cast<size_t>(cells[k].second) * nx + cells[k].first];
@@ -223,14 +225,22 @@ std::vector<Passage> findPassages(const GlobalPlanner& planner, const std::vecto
     const TPoint2D pre{c.x - u.x * d, c.y - u.y * d}, post{c.x + u.x * d, c.y + u.y * d};
     if (best_gain > planner.clearance(c.x, c.y) && planner.isPassable(pre.x, pre.y) &&
         planner.isPassable(post.x, post.y))
-      passages.push_back({best, pre, c, post});
+      passages.push_back(
+          {best, pre, c, post, u, std::max(0.0, planner.clearance(c.x, c.y) - radius)});
     i = j;
   }
   return passages;
 }
 
 // Corners: from each anchor, the farthest cell still in line of sight;
-// passages split the path and add their three points.
+// passages split the path and add their three points. A passage's point
+// before it is left out when the path reaches it no earlier than the
+// previous waypoint (the start, or the previous passage's throat) and that
+// waypoint lies on the passage's axis already, before the throat (within
+// the throat's spare room of the axis): the route would go back to it, and
+// a robot on the axis turned round to reach it. Off the axis, it stays:
+// going back is the price of entering straight. The point after a passage
+// is left out when the next passage's approach begins no later.
 template <class LineOfSight>
 void addWaypoints(const std::vector<Cell>& cells, const std::vector<Passage>& passages,
                   double approach, const LineOfSight& lineOfSight, Route& r) {
@@ -245,22 +255,36 @@ void addWaypoints(const std::vector<Cell>& cells, const std::vector<Passage>& pa
       anchor = next;
     }
   };
+  auto near = [&](size_t i, const Passage& ps) {
+    return std::hypot(r.cells[i].x - ps.mid.x, r.cells[i].y - ps.mid.y) < approach;
+  };
+  // Each passage's approach: the last cell before it and the first after it
+  // at least `approach` from its throat.
+  std::vector<size_t> upto(passages.size()), after(passages.size());
+  for (size_t k = 0; k < passages.size(); ++k) {
+    upto[k] = after[k] = passages[k].centre;
+    while (upto[k] > 0 && near(upto[k], passages[k])) --upto[k];
+    while (after[k] + 1 < cells.size() && near(after[k], passages[k])) ++after[k];
+  }
   size_t from = 0;
-  for (const auto& ps : passages) {
-    // Up to the approach point: the last cell before the passage.
-    size_t upto = ps.centre;
-    while (upto > from &&
-           std::hypot(r.cells[upto].x - ps.mid.x, r.cells[upto].y - ps.mid.y) < approach)
-      --upto;
-    if (upto > from) simplify(from, upto);
-    r.waypoints.push_back(ps.before);
-    r.waypoints.push_back(ps.mid);
-    r.waypoints.push_back(ps.after);
-    size_t after = ps.centre;
-    while (after + 1 < cells.size() &&
-           std::hypot(r.cells[after].x - ps.mid.x, r.cells[after].y - ps.mid.y) < approach)
-      ++after;
-    from = after;
+  for (size_t k = 0; k < passages.size(); ++k) {
+    const Passage& ps = passages[k];
+    const TPoint2D prev = r.waypoints.empty() ? r.cells.front() : r.waypoints.back();
+    const double dx = prev.x - ps.mid.x, dy = prev.y - ps.mid.y;
+    const bool on_axis = dx * ps.axis.x + dy * ps.axis.y < 0 &&
+                         std::abs(dx * ps.axis.y - dy * ps.axis.x) <= ps.spare;
+    if (upto[k] > from || !on_axis) {
+      if (upto[k] > from) simplify(from, upto[k]);
+      r.waypoints.push_back(ps.before);
+      r.waypoints.push_back(ps.mid);
+    } else if (ps.centre > from) {
+      simplify(from, ps.centre);  // ends at the throat's cell
+    }
+    from = std::max(from, ps.centre);
+    if (k + 1 == passages.size() || after[k] < upto[k + 1]) {
+      r.waypoints.push_back(ps.after);
+      from = after[k];
+    }
   }
   if (from + 1 < cells.size()) simplify(from, cells.size() - 1);
 }
@@ -290,8 +314,8 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
   if (!cells) return std::nullopt;
   Route r;
   for (const auto& [x, y] : *cells) r.cells.push_back({map_.idx2x(x), map_.idx2y(y)});
-  const auto passages = findPassages(*this, *cells, r.cells, dist_, nx_, radius_ + passage_margin_,
-                                     passage_approach_);
+  const auto passages = findPassages(*this, *cells, r.cells, dist_, nx_, radius_,
+                                     radius_ + passage_margin_, passage_approach_);
   auto sight = [&](int x0, int y0, int x1, int y1) { return lineOfSight(x0, y0, x1, y1); };
   addWaypoints(*cells, passages, passage_approach_, sight, r);
   if (r.waypoints.empty()) r.waypoints.push_back(g);

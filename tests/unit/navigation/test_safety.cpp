@@ -224,5 +224,53 @@ TEST(GlobalPlanner, NoRouteThroughADoorNarrowerThanTheRobot) {
   EXPECT_THROW(gp.plan({2, 3}, {5, 3}), InputError);   // on the wall
 }
 
+/** Two walls across a 10 x 3 m corridor at x = 5 and x = 6, each with a
+ *  0.9 m door centred at y = 1.5: two narrow passages 1 m apart. */
+mrpt::maps::COccupancyGridMap2D twoDoors() {
+  mrpt::maps::COccupancyGridMap2D g(0, 10, 0, 3, 0.05);
+  g.fill(0.95f);
+  auto wall = [&](double x0, double y0, double x1, double y1) {
+    for (double x = x0; x <= x1; x += 0.025)
+      for (double y = y0; y <= y1; y += 0.025) g.setPos(x, y, 0.05f);
+  };
+  wall(0, 0, 10, 0.1);
+  wall(0, 2.9, 10, 3);
+  for (const double x : {5.0, 6.0}) {
+    wall(x - 0.05, 0, x + 0.05, 1.05);
+    wall(x - 0.05, 1.95, x + 0.05, 3);
+  }
+  return g;
+}
+
+TEST(GlobalPlanner, PassagesCloserThanTheirApproachNeverSendTheRobotBack) {
+  // Each passage adds a waypoint passage_approach before and after its
+  // throat. The second door's "before" lies behind the first door's
+  // "after", and a robot standing within passage_approach of a throat has
+  // its "before" behind it: a route through them went back and forth, and
+  // the robot turned round to reach a waypoint it had passed. On the axis
+  // already, the route goes through the throats alone.
+  NavigationParams p;
+  const auto g = twoDoors();
+  const GlobalPlanner gp(g, 0.25, p);
+  for (const double x0 : {2.0, 4.7, 5.3}) {
+    const auto r = gp.plan({x0, 1.5}, {8, 1.5});
+    ASSERT_TRUE(r.has_value()) << x0;
+    double last = x0;
+    for (const auto& w : r->waypoints) {
+      EXPECT_GT(w.x, last - 0.02) << "from x = " << x0 << ": a waypoint behind the one before";
+      last = std::max(last, w.x);
+    }
+    EXPECT_TRUE(gp.polylineClear(r->waypoints, 0.3)) << x0;
+  }
+  // Off the axis, within the approach of the first door: back to its point
+  // before, to enter straight.
+  const auto r = gp.plan({4.5, 1.65}, {8, 1.5});
+  ASSERT_TRUE(r.has_value());
+  ASSERT_GE(r->waypoints.size(), 2u);
+  // (the throat is the door's cell centre nearest to its middle, x = 4.925)
+  EXPECT_NEAR(r->waypoints[0].x, 4.925 - p.passage_approach, 0.03);
+  EXPECT_NEAR(r->waypoints[0].y, 1.5, 0.06);
+}
+
 }  // namespace
 }  // namespace carenav::navigation
