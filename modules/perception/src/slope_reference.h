@@ -29,6 +29,10 @@ SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const 
  *  region, nearest the robot, if level within the mounting's tilt
  *  uncertainty, else `ref`) plus noise_k standard errors exceeds
  *  max_slope_deg (its ground voxels become obstacles), gentle otherwise.
+ *  A region the trimmed fit cannot judge (a ramp seen over a few rows at
+ *  the end of the view) is judged by the plain fit over all its cells when
+ *  that is one plane within the noise and can tell level from
+ *  max_slope_deg: steep by the same test, never gentle.
  *  Gentle regions reached from the floor's region through borders without
  *  a step (and the floor's region itself when its plane lies at z = 0 under
  *  the sensor) get their obstacle voxels that pass rules 1-2 against the

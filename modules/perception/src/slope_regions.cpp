@@ -556,6 +556,50 @@ void growAll(const ElevationGrid& g, const PerceptionParams& p, RegionCells& cs,
   }
 }
 
+/** Plain weighted fit of region `id` over all its cells (x, y from its seed). */
+bool plainFit(const ElevationGrid& g, const RegionCells& cs, const Regions& rg, size_t id,
+              PlaneFit& f) {
+  const int m = g.cells(), si = rg.seeds[id] / m, sj = rg.seeds[id] % m;
+  const double r = g.resolution();
+  PlaneSums s;
+  for (size_t h = rg.starts[id]; h < rg.starts[id + 1]; ++h) {
+    const int32_t q = rg.members[h];
+    s.add(1.0 / cs.var[q], (q / m - si) * r, (q % m - sj) * r, cs.z[q]);
+  }
+  return fitPlane(s, f);
+}
+
+/** Short views: a region that rule 6's trimmed fit could not judge (too
+ *  few cells away from its border: a ramp seen over a few rows at the end
+ *  of the view, all of it within the noise's smear of its foot or of the
+ *  view's end) is judged by the plain fit over all its cells when that fit
+ *  is one plane within the level-floor noise the region was grown with
+ *  (the bound of seedPlane(): a region over a blurred step edge is not) and
+ *  has the extent to tell a level surface from max_slope_deg (2 noise_k
+ *  standard errors at most max_slope_deg): steep, as rule 6, when its slope
+ *  against the floor plus noise_k standard errors exceeds max_slope_deg.
+ *  The smear flattens a short view (a 13.4 deg ramp seen over 0.2 m read
+ *  6.9 +- 0.4 deg), so nothing in that band is safe to call gentle. Only
+ *  steep verdicts are given: a region left unjudged keeps what the other
+ *  rules said, and nothing is given back as ground. */
+void judgeShortViews(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
+                     const Regions& rg, const RegionFit& floor, Verdicts& vd) {
+  constexpr size_t kMinCells = 12;
+  const double max_slope = p.max_slope_deg * M_PI / 180.0;
+  for (size_t id = 0; id < rg.seeds.size(); ++id) {
+    const size_t n = rg.starts[id + 1] - rg.starts[id];
+    PlaneFit f;
+    if (vd.v[id] || n < kMinCells || !plainFit(g, cs, rg, id, f)) continue;
+    const double dof = static_cast<double>(n) - 3;
+    if (f.chi2 / dof > 1 + p.noise_k * std::sqrt(2 / dof)) continue;
+    const RegionFit a = regionFit(f, n);
+    if (2 * p.noise_k * std::sqrt(a.se2 + floor.se2) > max_slope || !regionSteep(a, floor, p))
+      continue;
+    vd.fit[id] = f;
+    vd.v[id] = 2;
+  }
+}
+
 /** The verdict on every region of at least region_min_cells (in its slope
  *  fit too); returns the floor's region (-1: none). The floor slopes are
  *  measured against: the first judged region (seeded nearest the robot)
@@ -601,6 +645,7 @@ RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p
   innerDistance(classes, g.cells(), cs);
   RegionFit floor;
   const int32_t floor_id = judgeAll(g, p, cs, rg, ref, vd, floor);
+  judgeShortViews(g, p, cs, rg, floor, vd);
   if (floor_id >= 0) {
     const double r = g.resolution();
     rc.floor = true;

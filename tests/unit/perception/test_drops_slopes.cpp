@@ -368,3 +368,40 @@ TEST(SlopeVerdicts, ASteepWindowDoesNotSpreadOverGroundJudgedGentle) {
   // read gentle: 11.7 % occupied. Without that spread: < 7 %.
   EXPECT_LT(rampOccupied(7.0, 1.1, -3, 2), 0.07);
 }
+
+namespace {
+
+/** A ramp of `deg` from x = 2.55 m, seen from 0.64 m pitched 44 deg and
+ *  rolled 2 deg (the top rows of the image end about 0.2 m up a steep
+ *  ramp): render seed `seed`, the profile's noise. */
+Shot shortView(double deg, unsigned seed) {
+  Scene s;
+  s.floor(-10, 2.55).ramp(2.55, 4.05, 1.5 * std::tan(deg * kDeg));
+  const mrpt::poses::CPose3D cam(0.2, 0, 0.64, 0, 44 * kDeg, 2 * kDeg);
+  return perceive(s, cam, cam, kProfileNoise, walker(), seed);
+}
+
+}  // namespace
+
+TEST(ShortView, ASteepRampSeenOverAFewRowsIsNotTraversable) {
+  // The view ends a few cells up a 15 deg ramp: every cell of it lies within
+  // the noise's smear of its foot or of the view's end, so rule 6's trimmed
+  // fit has nothing to judge and rules 1-5 call the ramp ground. The plain
+  // fit over the short region (flattened by the smear) plus 4 standard
+  // errors exceeds max_slope_deg: steep. Without that, no voxel was steep and
+  // the corridor was clear (nothing occupied) on 3 of these 5 frames.
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    const auto sh = shortView(15, seed);
+    EXPECT_GT(sh.r.ism.steep_voxels, 50u) << "seed " << seed;
+    EXPECT_LE(firstOccupiedAhead(sh.pipe->grid()), 2.55 + 0.3) << "seed " << seed;
+  }
+}
+
+TEST(ShortView, AFiveDegreeRampSeenOverAFewRowsStaysTraversable) {
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    const auto sh = shortView(5, seed);
+    EXPECT_EQ(sh.r.ism.steep_voxels, 0u) << "seed " << seed;
+    EXPECT_GT(firstOccupiedAhead(sh.pipe->grid()), 4.0) << "seed " << seed;
+    EXPECT_LT(occupiedSeen(sh.pipe->grid(), 0.5, 3.5, -1.5, 1.5), 0.01) << "seed " << seed;
+  }
+}
