@@ -174,8 +174,7 @@ std::optional<std::vector<Cell>> aStarCells(const SearchGrid& g, Cell start, Cel
 struct Passage {
   size_t centre;
   TPoint2D before, mid, after;
-  TPoint2D axis;     ///< unit vector across the passage, in the direction of travel
-  double spare = 0;  ///< m, how far off the axis the robot's centre may cross the throat
+  TPoint2D axis;  ///< unit vector across the passage, in the direction of travel
 };
 
 /** Of 16 directions, the one along which the clearance around `c` rises most
@@ -199,7 +198,7 @@ std::pair<TPoint2D, double> crossingAxis(const GlobalPlanner& planner, const TPo
 // goals at doorways, reached with in-place turns).
 std::vector<Passage> findPassages(const GlobalPlanner& planner, const std::vector<Cell>& cells,
                                   const std::vector<TPoint2D>& pts, const std::vector<float>& dist,
-                                  int nx, double radius, double narrow, double approach) {
+                                  int nx, double narrow, double approach) {
   std::vector<Passage> passages;
   auto clear = [&](size_t k) {
     return dist[static_cast<size_t>(cells[k].second) * nx + cells[k].first];
@@ -225,8 +224,7 @@ std::vector<Passage> findPassages(const GlobalPlanner& planner, const std::vecto
     const TPoint2D pre{c.x - u.x * d, c.y - u.y * d}, post{c.x + u.x * d, c.y + u.y * d};
     if (best_gain > planner.clearance(c.x, c.y) && planner.isPassable(pre.x, pre.y) &&
         planner.isPassable(post.x, post.y))
-      passages.push_back(
-          {best, pre, c, post, u, std::max(0.0, planner.clearance(c.x, c.y) - radius)});
+      passages.push_back({best, pre, c, post, u});
     i = j;
   }
   return passages;
@@ -236,11 +234,10 @@ std::vector<Passage> findPassages(const GlobalPlanner& planner, const std::vecto
 // passages split the path and add their three points. A passage's point
 // before it is left out when the path reaches it no earlier than the
 // previous waypoint (the start, or the previous passage's throat) and that
-// waypoint lies on the passage's axis already, before the throat (within
-// the throat's spare room of the axis): the route would go back to it, and
-// a robot on the axis turned round to reach it. Off the axis, it stays:
-// going back is the price of entering straight. The point after a passage
-// is left out when the next passage's approach begins no later.
+// waypoint lies before the throat: the route would go back to it, and a
+// robot nearer to the throat than that turned round to reach it; the route
+// follows the path into the throat instead. The point after a passage is
+// left out when the next passage's approach begins no later.
 template <class LineOfSight>
 void addWaypoints(const std::vector<Cell>& cells, const std::vector<Passage>& passages,
                   double approach, const LineOfSight& lineOfSight, Route& r) {
@@ -270,10 +267,9 @@ void addWaypoints(const std::vector<Cell>& cells, const std::vector<Passage>& pa
   for (size_t k = 0; k < passages.size(); ++k) {
     const Passage& ps = passages[k];
     const TPoint2D prev = r.waypoints.empty() ? r.cells.front() : r.waypoints.back();
-    const double dx = prev.x - ps.mid.x, dy = prev.y - ps.mid.y;
-    const bool on_axis = dx * ps.axis.x + dy * ps.axis.y < 0 &&
-                         std::abs(dx * ps.axis.y - dy * ps.axis.x) <= ps.spare;
-    if (upto[k] > from || !on_axis) {
+    const bool before_throat =
+        (prev.x - ps.mid.x) * ps.axis.x + (prev.y - ps.mid.y) * ps.axis.y < 0;
+    if (upto[k] > from || !before_throat) {
       if (upto[k] > from) simplify(from, upto[k]);
       r.waypoints.push_back(ps.before);
       r.waypoints.push_back(ps.mid);
@@ -314,8 +310,8 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
   if (!cells) return std::nullopt;
   Route r;
   for (const auto& [x, y] : *cells) r.cells.push_back({map_.idx2x(x), map_.idx2y(y)});
-  const auto passages = findPassages(*this, *cells, r.cells, dist_, nx_, radius_,
-                                     radius_ + passage_margin_, passage_approach_);
+  const auto passages = findPassages(*this, *cells, r.cells, dist_, nx_, radius_ + passage_margin_,
+                                     passage_approach_);
   auto sight = [&](int x0, int y0, int x1, int y1) { return lineOfSight(x0, y0, x1, y1); };
   addWaypoints(*cells, passages, passage_approach_, sight, r);
   if (r.waypoints.empty()) r.waypoints.push_back(g);
