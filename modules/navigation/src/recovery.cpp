@@ -58,12 +58,21 @@ const ParamTable<RecoveryParams>& RecoveryParams::table() {
           .integer("max_attempts", &P::max_attempts, "", 1, 1000,
                    "recoveries without progress before giving up")
           .real("path_memory", &P::path_memory, "m", 0.1, 50,
-                "length of the robot's recent path kept for backing out");
+                "length of the robot's recent path kept for backing out")
+          .real("odom_error_d", &P::odom_error_d, "m/m", 0, 1,
+                "odometry error bound per metre travelled: a recorded pose is known free "
+                "while the error since, at the footprint's corners, is at most backup_margin")
+          .real("odom_error_w", &P::odom_error_w, "rad/rad", 0, 1,
+                "odometry heading error bound per radian turned")
+          .real("odom_error_wd", &P::odom_error_wd, "rad/m", 0, 1,
+                "odometry heading error bound per metre travelled");
   return t;
 }
 
 Recovery::Recovery(const RecoveryParams& p, const RobotParams& robot, const NavigationParams& nav)
-    : p_(p), r_(robot), nav_(nav) {}
+    : p_(p), r_(robot), nav_(nav) {
+  for (const auto& q : r_.footprint) lever_ = std::max(lever_, std::hypot(q.x, q.y));
+}
 
 const char* Recovery::phaseName(Phase p) {
   switch (p) {
@@ -81,11 +90,32 @@ const char* Recovery::phaseName(Phase p) {
   return "?";
 }
 
+void Recovery::trackOdometry(const TPose2D& pose) {
+  if (odo_last_) {
+    travel_ += std::hypot(pose.x - odo_last_->x, pose.y - odo_last_->y);
+    turned_ += std::abs(angleDiff(pose.phi, odo_last_->phi));
+  }
+  odo_last_ = pose;
+  // The error of a recorded pose grows with what the odometry measured
+  // since: the oldest go first.
+  size_t drop = 0;
+  while (drop < path_odo_.size()) {
+    const double d = travel_ - path_odo_[drop].first, a = turned_ - path_odo_[drop].second;
+    const double err = p_.odom_error_d * d + (p_.odom_error_w * a + p_.odom_error_wd * d) * lever_;
+    if (err <= p_.backup_margin) break;
+    ++drop;
+  }
+  path_.erase(path_.begin(), path_.begin() + static_cast<std::ptrdiff_t>(drop));
+  path_odo_.erase(path_odo_.begin(), path_odo_.begin() + static_cast<std::ptrdiff_t>(drop));
+}
+
 void Recovery::recordPose(const TPose2D& pose) {
+  trackOdometry(pose);
   if (phase_ == Phase::BackUp) return;  // retracing: the path is cut when backing ends
   if (!path_.empty() && std::hypot(pose.x - path_.back().x, pose.y - path_.back().y) < kPathSpacing)
     return;
   path_.push_back(pose);
+  path_odo_.push_back({travel_, turned_});
   // keep path_memory metres
   double len = 0;
   size_t keep = 0;
@@ -96,7 +126,10 @@ void Recovery::recordPose(const TPose2D& pose) {
       break;
     }
   }
-  if (keep > 0) path_.erase(path_.begin(), path_.begin() + static_cast<std::ptrdiff_t>(keep));
+  if (keep > 0) {
+    path_.erase(path_.begin(), path_.begin() + static_cast<std::ptrdiff_t>(keep));
+    path_odo_.erase(path_odo_.begin(), path_odo_.begin() + static_cast<std::ptrdiff_t>(keep));
+  }
 }
 
 size_t Recovery::nearestIndex(const TPose2D& pose) const {
@@ -243,6 +276,7 @@ void Recovery::finish(double now) {
     // the retraced part of the path is behind no more
     const size_t i = nearestIndex(last_pose_);
     path_.resize(std::min(path_.size(), i + 1));
+    path_odo_.resize(path_.size());
   }
   phase_ = Phase::Idle;
   replan_ = true;

@@ -98,6 +98,30 @@ TEST(Recovery, BacksOutOfADeadEndAlongTheWayItCame) {
   EXPECT_EQ(rec.recoveries(), 1u);
 }
 
+TEST(Recovery, ForgetsTheRecordedPathAsTheOdometryErrorSinceGrows) {
+  // The recorded path is known free in the odometry frame only while the
+  // odometry's error since it was recorded is within backup_margin: a
+  // robot that went round a wedge for a while retraced poses recorded long
+  // before, and touched a post the real robot had never swept.
+  NavigationParams nav;
+  const RobotParams r = fastRobot();
+  RecoveryParams rp;
+  Recovery rec(rp, r, nav);
+  for (double x = -2.0; x <= 1e-9; x += 0.02) rec.recordPose({x, 0, 0});
+  // 0.02 m/m and 0.01 rad/m at the corner (0.335 m): 1.29 m of travel for 3 cm.
+  ASSERT_FALSE(rec.path().empty());
+  EXPECT_NEAR(rec.path().front().x, -1.29, 0.05);
+  // Turning on the spot back and forth, 12 rad: 0.02 rad/rad at the corner.
+  for (int k = 0; k < 20; ++k) rec.recordPose({0, 0, k % 2 ? 0.3 : -0.3});
+  EXPECT_LE(rec.path().size(), 1u);
+  // Without an error model the whole path_memory stays.
+  rp.odom_error_d = rp.odom_error_w = rp.odom_error_wd = 0;
+  Recovery exact(rp, r, nav);
+  for (double x = -2.0; x <= 1e-9; x += 0.02) exact.recordPose({x, 0, 0});
+  for (int k = 0; k < 20; ++k) exact.recordPose({0, 0, k % 2 ? 0.3 : -0.3});
+  EXPECT_NEAR(exact.path().front().x, -2.0, 0.03);
+}
+
 TEST(Recovery, NeverReversesIntoAnObstacleOverRandomScenes) {
   // Random recorded paths and random posts, some behind the robot on its
   // way back: every back-out command passes the supervisor unchanged (it

@@ -15,6 +15,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace carenav::navigation {
@@ -33,6 +34,13 @@ struct RecoveryParams {
   double wait_time = 1.0;       ///< s, waiting when neither backing out nor turning is free
   int max_attempts = 6;         ///< recoveries without progress before giving up
   double path_memory = 3.0;     ///< m, of the robot's own recent path kept
+  /** The odometry's error bound, per metre travelled (m/m), per radian
+   *  turned (rad/rad) and per metre travelled in heading (rad/m): a
+   *  recorded pose is known free only while the error since it was
+   *  recorded, at the footprint's corners, is at most backup_margin. */
+  double odom_error_d = 0.02;
+  double odom_error_w = 0.02;
+  double odom_error_wd = 0.01;
   static const ParamTable<RecoveryParams>& table();
 };
 
@@ -94,6 +102,15 @@ class Recovery {
   RobotParams r_;
   NavigationParams nav_;
   std::vector<TPose2D> path_;  // oldest first
+  /** The odometry travelled and turned (m, rad) when each pose of path_ was
+   *  recorded, and since the start. */
+  std::vector<std::pair<double, double>> path_odo_;
+  double travel_ = 0, turned_ = 0;
+  std::optional<TPose2D> odo_last_;
+  double lever_ = 0;  // m, the footprint's farthest corner from the centre
+  /** Adds the motion since the last recorded cycle, and forgets the oldest
+   *  poses whose odometry error since may exceed backup_margin. */
+  void trackOdometry(const TPose2D& pose);
   Phase phase_ = Phase::Idle;
   std::string reason_;
   size_t recoveries_ = 0;
