@@ -258,7 +258,10 @@ Navigator::Cycle Navigator::cycle(double now) {
   Cycle c;
   if (last_cycle_ && now > *last_cycle_ && now - *last_cycle_ < 1.0) period_ = now - *last_cycle_;
   last_cycle_ = now;
-  const TPose2D pose = planner_->usesMotionState() ? poseAt(now) : odom_;
+  // A goal robot's commands are judged from its dynamics, whatever its
+  // planner assumes; a walker's user-intent-dwa takes a command at once.
+  const bool dynamics = planner_->usesMotionState() || !planner_->needsUserIntent();
+  const TPose2D pose = dynamics ? poseAt(now) : odom_;
   cycle_pose_ = pose;
   memory_.prune(now, {pose.x, pose.y});
   // The perception grid's cells stand alone in theirs: joined to the
@@ -350,7 +353,10 @@ Navigator::Cycle Navigator::cycle(double now) {
   s.plan = c.plan;
   s.pose = pose;
   s.map = &map_;
-  s.motion = in.motion;
+  // The supervisor judges a goal robot's command from the robot's state
+  // even when its planner does not (mrpt-ptg plans commands as taken at
+  // once: at 2 m/s it turned into posts it could no longer avoid).
+  s.motion = dynamics ? std::optional<MotionState>(motionState()) : in.motion;
   c.decision = supervisor_.apply(s);
   last_cmd_ = c.decision.cmd;
   // Held: stopped, or slowed to a crawl (the planner and the supervisor
