@@ -584,6 +584,8 @@ bool plainFit(const ElevationGrid& g, const RegionCells& cs, const Regions& rg, 
  *  rules said, and nothing is given back as ground. */
 void judgeShortViews(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
                      const Regions& rg, const RegionFit& floor, Verdicts& vd) {
+  // At least 9 degrees of freedom for the plane's chi-square test below
+  // (region_min_cells, 50, is what the trimmed fit needs).
   constexpr size_t kMinCells = 12;
   const double max_slope = p.max_slope_deg * M_PI / 180.0;
   for (size_t id = 0; id < rg.seeds.size(); ++id) {

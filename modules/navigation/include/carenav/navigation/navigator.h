@@ -117,9 +117,9 @@ class Navigator {
    *  earlier (the sensors' last frame), and the robot kept moving at its
    *  measured velocity meanwhile (0.2 m in 0.1 s at 2 m/s). At most
    *  odom_timeout seconds ahead (older odometry: the supervisor stops).
-   *  The cycle of a planner that rolls out the robot's dynamics
-   *  (usesMotionState: the command's latency, the ramps) starts from it;
-   *  one that takes a command at once (user-intent-dwa) from the odometry. */
+   *  A goal robot's cycle (planner, recoveries, supervisor, which judges
+   *  its commands from the robot's dynamics) starts from it; a walker's
+   *  user-intent-dwa, which takes a command at once, from the odometry. */
   TPose2D poseAt(double now) const;
   TPoint2D mapToOdom(const TPoint2D& p) const;
   TPose2D mapToOdom(const TPose2D& p) const;
