@@ -42,6 +42,16 @@ void CorrelativeMatcher::setReference(const mrpt::maps::CSimplePointsMap& ref) {
         c = std::max(c, static_cast<float>(fx[dx + r] * fy[dy + r]));
       }
   }
+  // Closeness g to log-likelihood ratio against an unexplained point (the
+  // outlier floor): monotone, so the max over points above is the same.
+  // Tabulated (cells far from every point stay 0 = log1p(0)); 4096 steps
+  // of closeness are finer than the float closeness needs here.
+  constexpr int kSteps = 4096;
+  const double odds = (1 - p_.outlier) / p_.outlier;
+  std::vector<float> lut(kSteps + 1);
+  for (int i = 0; i <= kSteps; ++i) lut[i] = static_cast<float>(std::log1p(odds * i / kSteps));
+  for (float& c : table_)
+    if (c > 0) c = lut[static_cast<size_t>(std::lround(std::min(1.f, c) * kSteps))];
 }
 
 double CorrelativeMatcher::lookup(double x, double y) const {
@@ -57,7 +67,26 @@ double CorrelativeMatcher::score(const std::vector<float>& xs, const std::vector
   double sum = 0;
   for (size_t i = 0; i < xs.size(); ++i)
     sum += lookup(x + c * xs[i] - s * ys[i], y + s * xs[i] + c * ys[i]);
+  return sum;
+}
+
+double CorrelativeMatcher::closeness(const std::vector<float>& xs, const std::vector<float>& ys,
+                                     double x, double y, double yaw) const {
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  const double odds = (1 - p_.outlier) / p_.outlier;
+  double sum = 0;
+  for (size_t i = 0; i < xs.size(); ++i)
+    sum += std::expm1(lookup(x + c * xs[i] - s * ys[i], y + s * xs[i] + c * ys[i])) / odds;
   return xs.empty() ? 0 : sum / xs.size();
+}
+
+double CorrelativeMatcher::logPriorYaw(const Prior& prior, double yaw, double syaw) {
+  double a2 = prior.yaws.empty() ? 0 : 1e300;
+  for (const double m : prior.yaws) {
+    const double a = std::remainder(yaw - m, 2 * M_PI) / syaw;
+    a2 = std::min(a2, a * a);
+  }
+  return -0.5 * a2;
 }
 
 void CorrelativeMatcher::windowSums(const std::vector<int>& gx, const std::vector<int>& gy, int nxy,
@@ -88,90 +117,95 @@ mrpt::poses::CPose2D CorrelativeMatcher::match(const mrpt::maps::CSimplePointsMa
                                                const mrpt::poses::CPose2D& prior,
                                                double* best_score, double widen_xy,
                                                double widen_yaw) const {
+  const Result r = match(scan, {prior}, Prior::at(prior), widen_xy, widen_yaw);
+  if (best_score) *best_score = r.closeness;
+  return r.pose;
+}
+
+CorrelativeMatcher::Result CorrelativeMatcher::match(
+    const mrpt::maps::CSimplePointsMap& scan, const std::vector<mrpt::poses::CPose2D>& centres,
+    const Prior& motion, double widen_xy, double widen_yaw) const {
   widen_xy = std::max(1.0, widen_xy);
   widen_yaw = std::max(1.0, widen_yaw);
+  const double deg = M_PI / 180;
   const double window_xy = p_.window_xy * widen_xy;
   const double window_yaw = std::min(180.0, p_.window_yaw * widen_yaw);
-  const double weight_xy = p_.prior_weight / widen_xy, weight_yaw = p_.prior_weight / widen_yaw;
+  const double sa = p_.prior_along * widen_xy, sc = p_.prior_across * widen_xy;
+  const double syaw = p_.prior_yaw * widen_yaw * deg;
   const auto& sx = scan.getPointsBufferRef_x();
   const auto& sy = scan.getPointsBufferRef_y();
   std::vector<float> all_x(sx.begin(), sx.end()), all_y(sy.begin(), sy.end());
   std::vector<float> cx, cy;
   const size_t stride = std::max<size_t>(1, all_x.size() / std::max<size_t>(1, p_.coarse_points));
   for (size_t i = 0; i < all_x.size(); i += stride) cx.push_back(all_x[i]), cy.push_back(all_y[i]);
-  const double deg = M_PI / 180;
-  auto penalised = [&](double sc, double x, double y, double yaw) {
-    const double d = std::hypot(x - prior.x(), y - prior.y());
-    const double a = std::abs(std::remainder(yaw - prior.phi(), 2 * M_PI)) / (10 * deg);
-    return sc - weight_xy * d - weight_yaw * a;
-  };
-  // Coarse pass over the whole window. The coarse step is a whole number of
-  // table cells, so for each yaw the scan points are rotated and turned into
-  // cell indices once, and every translation of the window is an integer
-  // offset of those indices ([Olson09csm, Sec. IV]: the rotation is the only
-  // costly part of evaluating a pose).
-  double bx = prior.x(), by = prior.y(), byaw = prior.phi(), best = -1e9;
+  // Log-likelihood of the scan: the points' log-likelihood ratios, as many
+  // of them independent as `independence` says (the coarse pass sums a
+  // subset: scaled to all points).
+  const double w_all = p_.independence;
+  const double w_coarse = cx.empty() ? 0 : p_.independence * all_x.size() / cx.size();
+  Result best;
+  if (centres.empty()) return best;
   const int nxy = static_cast<int>(std::round(window_xy / p_.coarse_xy));
   const int nyaw = static_cast<int>(std::round(window_yaw / p_.coarse_yaw));
   const double cells_per_step = p_.coarse_xy / p_.cell;
   const int step = static_cast<int>(std::lround(cells_per_step));
   const bool integer_steps = step >= 1 && std::abs(cells_per_step - step) < 1e-6;
   std::vector<int> gx(cx.size()), gy(cx.size());
-  std::vector<double> dist((2 * nxy + 1) * (2 * nxy + 1));  // m, from the prior
-  std::vector<double> sums(dist.size());
-  for (int i = -nxy; i <= nxy; ++i)
-    for (int j = -nxy; j <= nxy; ++j)
-      dist[(i + nxy) * (2 * nxy + 1) + (j + nxy)] = std::hypot(i * p_.coarse_xy, j * p_.coarse_xy);
-  for (int a = -nyaw; a <= nyaw; ++a) {
-    const double yaw = prior.phi() + a * p_.coarse_yaw * deg;
-    if (!integer_steps) {
-      for (int i = -nxy; i <= nxy; ++i)
-        for (int j = -nxy; j <= nxy; ++j) {
-          const double x = prior.x() + i * p_.coarse_xy, y = prior.y() + j * p_.coarse_xy;
-          const double sc = penalised(score(cx, cy, x, y, yaw), x, y, yaw);
-          if (sc > best) best = sc, bx = x, by = y, byaw = yaw;
-        }
-      continue;
-    }
-    const double c = std::cos(yaw), s = std::sin(yaw);
-    for (size_t k = 0; k < cx.size(); ++k) {
-      gx[k] =
-          static_cast<int>(std::floor((prior.x() + c * cx[k] - s * cy[k] - x0_) / p_.cell + 1e-9));
-      gy[k] =
-          static_cast<int>(std::floor((prior.y() + s * cx[k] + c * cy[k] - y0_) / p_.cell + 1e-9));
-    }
-    // penalised() spelled out: the heading part of the prior's penalty is
-    // the same for the whole yaw, the distance part for every yaw.
-    const double yaw_penalty =
-        weight_yaw * std::abs(std::remainder(yaw - prior.phi(), 2 * M_PI)) / (10 * deg);
-    windowSums(gx, gy, nxy, step, sums);
-    for (int i = -nxy; i <= nxy; ++i)
-      for (int j = -nxy; j <= nxy; ++j) {
-        const double sum = sums[(j + nxy) * (2 * nxy + 1) + (i + nxy)];
-        const double sc = (cx.empty() ? 0 : sum / cx.size()) -
-                          weight_xy * dist[(i + nxy) * (2 * nxy + 1) + (j + nxy)] - yaw_penalty;
-        if (sc > best) {
-          best = sc;
-          bx = prior.x() + i * p_.coarse_xy;
-          by = prior.y() + j * p_.coarse_xy;
-          byaw = yaw;
-        }
+  std::vector<double> sums((2 * nxy + 1) * (2 * nxy + 1));
+  double bx = centres[0].x(), by = centres[0].y(), byaw = centres[0].phi(), top = -1e300;
+  // Coarse pass over the window around each centre. The coarse step is a
+  // whole number of table cells, so for each yaw the scan points are rotated
+  // and turned into cell indices once, and every translation of the window
+  // is an integer offset of those indices ([Olson09csm, Sec. IV]: the
+  // rotation is the only costly part of evaluating a pose).
+  for (const auto& prior : centres)
+    for (int a = -nyaw; a <= nyaw; ++a) {
+      const double yaw = prior.phi() + a * p_.coarse_yaw * deg;
+      const double yaw_prior = logPriorYaw(motion, yaw, syaw);
+      const double mid = travelDirection(motion, yaw);
+      const double mc = std::cos(mid), ms = std::sin(mid);
+      auto consider = [&](double sum, double x, double y) {
+        const double post = w_coarse * sum + yaw_prior + logPriorXY(motion, x, y, mc, ms, sa, sc);
+        if (post > top) top = post, bx = x, by = y, byaw = yaw;
+      };
+      if (!integer_steps) {
+        for (int i = -nxy; i <= nxy; ++i)
+          for (int j = -nxy; j <= nxy; ++j) {
+            const double x = prior.x() + i * p_.coarse_xy, y = prior.y() + j * p_.coarse_xy;
+            consider(score(cx, cy, x, y, yaw), x, y);
+          }
+        continue;
       }
-  }
+      const double c = std::cos(yaw), s = std::sin(yaw);
+      for (size_t k = 0; k < cx.size(); ++k) {
+        gx[k] = static_cast<int>(
+            std::floor((prior.x() + c * cx[k] - s * cy[k] - x0_) / p_.cell + 1e-9));
+        gy[k] = static_cast<int>(
+            std::floor((prior.y() + s * cx[k] + c * cy[k] - y0_) / p_.cell + 1e-9));
+      }
+      windowSums(gx, gy, nxy, step, sums);
+      for (int i = -nxy; i <= nxy; ++i)
+        for (int j = -nxy; j <= nxy; ++j)
+          consider(sums[(j + nxy) * (2 * nxy + 1) + (i + nxy)], prior.x() + i * p_.coarse_xy,
+                   prior.y() + j * p_.coarse_xy);
+    }
   // Fine pass around the coarse optimum, all points.
   const double fx = bx, fy = by, fyaw = byaw;
-  best = -1e9;
+  top = -1e300;
   for (int a = -4; a <= 4; ++a) {
     const double yaw = fyaw + a * p_.coarse_yaw / 4 * deg;
     for (int i = -4; i <= 4; ++i)
       for (int j = -4; j <= 4; ++j) {
         const double x = fx + i * p_.coarse_xy / 4, y = fy + j * p_.coarse_xy / 4;
-        const double sc = penalised(score(all_x, all_y, x, y, yaw), x, y, yaw);
-        if (sc > best) best = sc, bx = x, by = y, byaw = yaw;
+        const double post =
+            w_all * score(all_x, all_y, x, y, yaw) + logPrior(motion, x, y, yaw, sa, sc, syaw);
+        if (post > top) top = post, bx = x, by = y, byaw = yaw;
       }
   }
-  if (best_score) *best_score = score(all_x, all_y, bx, by, byaw);
-  return mrpt::poses::CPose2D(bx, by, byaw);
+  best.pose = mrpt::poses::CPose2D(bx, by, byaw);
+  best.log_posterior = top;
+  best.closeness = closeness(all_x, all_y, bx, by, byaw);
+  return best;
 }
 
 }  // namespace carenav::slam

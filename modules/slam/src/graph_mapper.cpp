@@ -236,6 +236,8 @@ class GraphMapper : public Mapper {
     double goodness = 0;
     mrpt::math::CMatrixDouble33 cov;
     bool consistent = true;  ///< within the motion prior's gate
+    bool searched = false;   ///< `start` is a correlative search's pose
+    CPose2D start;           ///< where ICP started
   };
 
   /** ICP of the current scan against the submap from `predicted`. Without
@@ -249,8 +251,12 @@ class GraphMapper : public Mapper {
     // and tens of degrees off: real logs turn 20-60 deg between scans (the
     // Intel and CSAIL CARMEN logs). A correlative search over a window
     // around it finds the basin; ICP refines.
-    // Two priors: constant velocity, and no motion (a robot that stops
-    // turning would otherwise be spun on by its own prediction).
+    // The search maximises scan likelihood times the motion prior: the last
+    // step's travel again, along the heading halfway through the turn, and a
+    // heading that is either the constant-velocity one or the last one (a
+    // robot that stops turning would otherwise be spun on by its own
+    // prediction). The window is searched around the prediction and around
+    // "no motion" (a robot that stops).
     // After failed matches the robot went on moving unseen (e.g. turning
     // 30 deg per scan at a corridor's end, Intel log): the window around
     // "no motion" widens with every failure in a row (x2, x3: +-70 deg and
@@ -262,10 +268,11 @@ class GraphMapper : public Mapper {
       const CPose2D start = correlative_.match(*current_points_, pose_, &sc, widen, widen);
       return refine(start, sc, true);
     }
-    double s_pred = 0, s_still = 0;
-    const CPose2D a = correlative_.match(*current_points_, predicted, &s_pred);
-    const CPose2D b = correlative_.match(*current_points_, pose_, &s_still);
-    Match best = refine(s_still > s_pred + 0.02 ? b : a, std::max(s_pred, s_still), true);
+    const double advance = std::copysign(last_increment_.norm(), last_increment_.x());
+    const CorrelativeMatcher::Prior prior{pose_, advance, {predicted.phi(), pose_.phi()}};
+    const CorrelativeMatcher::Result c =
+        correlative_.match(*current_points_, {predicted, pose_}, prior);
+    Match best = refine(c.pose, c.closeness, true);
     if (best.goodness < cfg_.slam.min_icp_goodness) {
       // A weak match: the robot may have turned more than the window (CSAIL
       // log: 65 deg between two scans). Search three times the heading window
@@ -332,8 +339,9 @@ class GraphMapper : public Mapper {
   bool stepLaserOnly(const CPose2D& guess) {
     const Match m = matchToSubmap(pose_ + guess, true);
     if (m.goodness >= cfg_.slam.min_icp_goodness) {
-      pose_ = m.pose;
-      last_cov_ = m.cov;
+      const Match r = refineOnLines(m);
+      pose_ = r.pose;
+      last_cov_ = r.cov;
       ++stats_.icp_accepted;
       lost_ = 0;
       return true;
@@ -348,6 +356,28 @@ class GraphMapper : public Mapper {
     ++stats_.icp_rejected;
     ++lost_;
     return false;
+  }
+
+  /** The laser-only match refined as with odometry: point-to-line ICP
+   *  ([Censi08]) from the point-to-point result, under a prior around the
+   *  correlative search's pose (the posterior's mode with the motion prior,
+   *  known to a coarse step of the search), so that what the walls fix is
+   *  refined and what they do not (along a corridor) stays where the search
+   *  put it instead of sliding. Kept when it moves the match less than a
+   *  coarse step and pairs at least kLineMinInliers of the points. */
+  Match refineOnLines(const Match& m) const {
+    constexpr double kLineMinInliers = 0.3;
+    if (line_icp_.lines() == 0 || !m.searched) return m;
+    const auto& cp = correlative_.parameters();
+    const PoseGaussian prior(m.start, diagCov(cp.coarse_xy, cp.coarse_yaw * kDeg));
+    const LineIcp::Result r = line_icp_.align(*current_points_, m.pose, &prior);
+    if (r.inliers < kLineMinInliers || (r.pose - m.pose).norm() > cp.coarse_xy ||
+        std::abs(std::remainder(r.pose.phi() - m.pose.phi(), 2 * M_PI)) > cp.coarse_yaw * kDeg)
+      return m;
+    Match out = m;
+    out.pose = r.pose;
+    out.cov = r.cov;
+    return out;
   }
 
   /** Visibility agreement (scanVisibility) of the current scan placed at
@@ -382,6 +412,8 @@ class GraphMapper : public Mapper {
    *  `searched`). */
   Match refine(const CPose2D& start, double start_score, bool searched) {
     Match best;
+    best.searched = searched;
+    best.start = start;
     mrpt::slam::CICP::TReturnInfo info;
     auto pdf = icp_.Align(&submap_, current_points_.get(), start, info);
     best.goodness = info.goodness;
