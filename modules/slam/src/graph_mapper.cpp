@@ -154,6 +154,17 @@ void scanVisibility(const CSimplePointsMap& pts, const CPose2D& pts_in_scan_robo
   }
 }
 
+/** The correlative search's parameters from the profile's [slam] keys. */
+CorrelativeMatcher::Parameters correlativeParameters(const SlamParams& s) {
+  CorrelativeMatcher::Parameters p;
+  p.prior_along = s.laser_motion_along;
+  p.prior_across = s.laser_motion_across;
+  p.prior_yaw = s.laser_motion_deg;
+  p.outlier = s.laser_outlier;
+  p.independence = s.laser_independence;
+  return p;
+}
+
 class GraphMapper : public Mapper {
  public:
   explicit GraphMapper(const MapperConfig& cfg) : cfg_(cfg) {
@@ -856,7 +867,7 @@ class GraphMapper : public Mapper {
   std::vector<Candidate> candidates_;  // closures of the last keyframes
   size_t next_candidate_id_ = 0;
   std::map<std::pair<size_t, size_t>, bool> consistent_;  // by candidate ids
-  CorrelativeMatcher correlative_{CorrelativeMatcher::Parameters{}};
+  CorrelativeMatcher correlative_{correlativeParameters(cfg_.slam)};
   LineIcp line_icp_{LineIcp::Parameters{}};
   MotionNoise motion_{cfg_.slam.odom_dist_frac, cfg_.slam.odom_deg_per_m, cfg_.slam.odom_turn_frac,
                       cfg_.slam.odom_min_xy, cfg_.slam.odom_min_deg};

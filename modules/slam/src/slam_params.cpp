@@ -91,7 +91,24 @@ const ParamTable<SlamParams>& SlamParams::table() {
           .real("odom_min_xy", &SlamParams::odom_min_xy, "m", 0.001, 10,
                 "icp-graph with odometry: smallest position standard deviation of a step")
           .real("odom_min_deg", &SlamParams::odom_min_deg, "deg", 0.01, 90,
-                "icp-graph with odometry: smallest heading standard deviation of a step");
+                "icp-graph with odometry: smallest heading standard deviation of a step")
+          .real("laser_motion_along", &SlamParams::laser_motion_along, "m", 0.01, 10,
+                "icp-graph laser only: standard deviation of one step's travel from the last "
+                "step's, along the heading halfway through the turn (the motion prior the "
+                "scan's likelihood is weighed against in the correlative search)")
+          .real("laser_motion_across", &SlamParams::laser_motion_across, "m", 0.01, 10,
+                "icp-graph laser only: standard deviation of one step's travel across that "
+                "heading (side slip, the arc taken as a straight line; a wheeled robot "
+                "does not move sideways)")
+          .real("laser_motion_deg", &SlamParams::laser_motion_deg, "deg", 0.1, 180,
+                "icp-graph laser only: standard deviation of one step's heading from the "
+                "constant-velocity one or the last one, whichever is closer")
+          .real("laser_outlier", &SlamParams::laser_outlier, "", 0.001, 0.999,
+                "icp-graph laser only: share of a scan's points the submap is expected not "
+                "to explain (the floor of a point's likelihood in the correlative search)")
+          .real("laser_independence", &SlamParams::laser_independence, "", 0.001, 1,
+                "icp-graph laser only: share of the scan points counted as independent "
+                "measurements in the correlative search (neighbouring beams err together)");
   return t;
 }
 

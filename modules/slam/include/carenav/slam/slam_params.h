@@ -47,6 +47,12 @@ struct SlamParams {
   double odom_turn_frac = 0.05;  ///< heading std dev, share of the turn
   double odom_min_xy = 0.03;     ///< m, floor of the position std dev
   double odom_min_deg = 1.0;     ///< deg, floor of the heading std dev
+  // icp-graph laser only: the correlative search (CorrelativeMatcher::Parameters)
+  double laser_motion_along = 0.5;    ///< m, std dev of a step's travel along the mid heading
+  double laser_motion_across = 0.15;  ///< m, std dev across it
+  double laser_motion_deg = 30;       ///< deg, std dev of a step's heading
+  double laser_outlier = 0.2;         ///< share of scan points the submap does not explain
+  double laser_independence = 0.2;    ///< share of scan points counted as independent
   static const ParamTable<SlamParams>& table();
 };
 
