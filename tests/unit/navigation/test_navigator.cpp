@@ -256,3 +256,36 @@ TEST(Navigator, APersonSteppingIntoTheWayStopsTheRobotEarlierThanABox) {
   n.cycle(1.0);
   EXPECT_TRUE(n.moving().empty());
 }
+
+TEST(Navigator, TheSupervisorJudgesMrptPtgFromTheRobotsState) {
+  // mrpt-ptg plans its commands as taken at once. Driving at 1.5 m/s with
+  // 2 m/s^2 of braking the robot needs 0.64 m to stop (0.56 m braking, 7.5
+  // cm of latency); a wall 1 m ahead of its centre leaves 0.4 m past its
+  // front and safe distance. The planner proposes a turn towards the goal
+  // on its left, which is fine from a standstill but sweeps the front into
+  // the wall while the robot still slides on: the supervisor, judging the
+  // command from the robot's measured speed, stops it. From a standstill
+  // at the same place the same turn passes.
+  RobotParams r = longRobot();
+  r.v_max = 2.0;
+  r.w_max = 4.0;
+  r.acc_v = 2.0;
+  r.acc_w = 4.0;
+  NavigationParams p;
+  p.plugin = "mrpt-ptg";
+  std::vector<TPoint2D> wall;
+  for (double y = -2; y <= 2; y += 0.02) wall.push_back({1.0, y});
+  auto decide = [&](double v) {
+    Navigator n(p, r);
+    n.setOdometry({0, 0, 0}, {v, 0}, 1.0);
+    n.addObstaclePoints(wall, 1.0);
+    n.setRoute({{0, 0}, {0, 3}}, {0, 3, M_PI / 2});
+    return n.cycle(1.0).decision;
+  };
+  const SafetyDecision fast = decide(1.5);
+  EXPECT_EQ(fast.action, SafetyAction::Stop) << fast.reason;
+  EXPECT_EQ(fast.rule, SafetyRule::CannotBrake) << fast.reason;
+  const SafetyDecision still = decide(0.0);
+  EXPECT_EQ(still.action, SafetyAction::Pass) << still.reason;
+  EXPECT_GT(std::abs(still.cmd.w), 0.5) << "the turn towards the goal";
+}
