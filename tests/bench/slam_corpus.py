@@ -18,7 +18,7 @@ on a loaded machine; ratios are carenav / MRPT on the same input.
 
   tests/bench/slam_corpus.py --carenav build/apps/carenav/carenav --out /tmp/corpus \
       [--logs intel,csail] [--inputs laser,odo1,odo2,odo3] [--jobs 2] [--mrpt] \
-      [--localize [--mrpt-loc]] [--reuse] [--set section.key=value ...]
+      [--localize [--mrpt-loc]] [--reuse] [--set section.key=value ...] [--decimate N]
 """
 import argparse
 import concurrent.futures as cf
@@ -103,6 +103,8 @@ def import_log(a, log, inp, work):
     if os.path.exists(rawlog) and os.path.exists(tum):
         return rawlog, tum
     src = os.path.join(a.data, f"{log}-corrected.log.gz")
+    if a.decimate > 1:
+        src = decimated(src, a.decimate, os.path.join(work, "rawlog", f"{log}-every{a.decimate}.log.gz"))
     cmd = [a.carenav, "-q", "import", "carmen", src, "--out", rawlog]
     if inp == "laser":
         cmd += ["--odometry", "none"]
@@ -112,6 +114,28 @@ def import_log(a, log, inp, work):
     if rc != 0:
         raise RuntimeError(f"import failed ({rc}): {' '.join(cmd)}")
     return rawlog, tum
+
+
+LASER_MESSAGES = ("FLASER", "RLASER", "ROBOTLASER", "RAWLASER")
+
+
+def decimated(src, n, dest):
+    """A copy of the CARMEN log `src` with only every n-th laser message (all
+    other lines kept): the same run recorded at 1/n of the scan rate, with
+    n times the motion between scans."""
+    import gzip
+    if os.path.exists(dest):
+        return dest
+    k = 0
+    with gzip.open(src, "rt", errors="replace") as f, gzip.open(dest + ".part", "wt") as g:
+        for line in f:
+            if line.startswith(LASER_MESSAGES):
+                k += 1
+                if (k - 1) % n:
+                    continue
+            g.write(line)
+    os.replace(dest + ".part", dest)
+    return dest
 
 
 def headless_ini(template, rawlog, out_dir, dest, extra=None):
@@ -398,6 +422,9 @@ def main():
     ap.add_argument("--reuse", action="store_true",
                     help="re-evaluate and tabulate the slam runs already in --out (no mapping)")
     ap.add_argument("--set", action="append", default=[], help="profile override (repeatable)")
+    ap.add_argument("--decimate", type=int, default=1,
+                    help="keep only every N-th scan of each log (the same run at 1/N of the "
+                         "scan rate: a check that the front end holds at other rates)")
     a = ap.parse_args()
     a.carenav = os.path.abspath(a.carenav)
     if (a.mrpt or a.mrpt_loc) and not shutil.which("icp-slam"):
