@@ -53,6 +53,66 @@ TEST(CorrelativeMatcher, RecoversAPoseFarFromThePrior) {
   EXPECT_GT(score, 0.9);
 }
 
+namespace {
+/** Two walls 2 m apart along the x axis (y = +-1), every 2 cm, from x = -20
+ *  to 20: a corridor whose scan fixes y and heading but not x. */
+CSimplePointsMap corridorAlongX() {
+  CSimplePointsMap m;
+  for (double x = -20; x <= 20; x += 0.02) {
+    m.insertPoint(x, 1, 0);
+    m.insertPoint(x, -1, 0);
+  }
+  return m;
+}
+}  // namespace
+
+TEST(CorrelativeMatcher, AlongACorridorTheMotionPriorDecides) {
+  // The scan explains every position along the corridor alike; the motion
+  // prior (the last step's travel again, 0.8 m along the heading) decides,
+  // from both window centres (the prediction and "no motion").
+  const CSimplePointsMap ref = corridorAlongX();
+  slam::CorrelativeMatcher m{slam::CorrelativeMatcher::Parameters{}};
+  m.setReference(ref);
+  CSimplePointsMap scan;
+  for (double x = -5; x <= 5; x += 0.05) {
+    scan.insertPoint(x, 1, 0);
+    scan.insertPoint(x, -1, 0);
+  }
+  const CPose2D last(0, 0, 0), predicted(0.8, 0, 0);
+  const slam::CorrelativeMatcher::Prior prior{last, 0.8, {0.0, 0.0}};
+  const auto r = m.match(scan, {predicted, last}, prior);
+  EXPECT_NEAR(r.pose.x(), 0.8, 0.05);
+  EXPECT_NEAR(r.pose.y(), 0.0, 0.03);
+  EXPECT_NEAR(r.pose.phi(), 0.0, 1.0 * M_PI / 180);
+  EXPECT_GT(r.closeness, 0.9);
+}
+
+TEST(CorrelativeMatcher, AWheeledRobotDoesNotSlideSideways) {
+  // The robot faces across the corridor (heading 90 deg): its scan fixes
+  // the position across the corridor walls (along its heading) but not
+  // along them, which is sideways for the robot. A wheeled robot does not
+  // travel sideways: the match stays where it was along the walls, although
+  // the window reaches 1 m either way.
+  const CSimplePointsMap ref = corridorAlongX();
+  slam::CorrelativeMatcher m{slam::CorrelativeMatcher::Parameters{}};
+  m.setReference(ref);
+  CSimplePointsMap scan;  // the walls seen from (0, 0) facing +y: ahead and behind
+  for (double s = -5; s <= 5; s += 0.05) {
+    scan.insertPoint(1, -s, 0);
+    scan.insertPoint(-1, -s, 0);
+  }
+  const CPose2D last(0, 0, M_PI / 2);
+  for (const double advance : {0.0, 0.3}) {
+    // Travelling 0.3 m "forward" into a wall would not fit the scan: the
+    // scan holds the position across, the prior the one along.
+    const slam::CorrelativeMatcher::Prior prior{last, advance, {M_PI / 2}};
+    const CPose2D predicted = last + CPose2D(advance, 0, 0);
+    const auto r = m.match(scan, {predicted, last}, prior);
+    EXPECT_NEAR(r.pose.x(), 0.0, 0.05) << "advance " << advance;
+    EXPECT_NEAR(r.pose.y(), 0.0, 0.05) << "advance " << advance;
+  }
+}
+
 TEST(CorrelativeMatcher, MatchesConsecutiveScansOfTheIntelLog) {
   // Real scans, 0.6 m and 20 deg apart on average; the reference poses of
   // the (SLAM-corrected) log are the truth. From a no-motion prior the
