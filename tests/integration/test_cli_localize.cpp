@@ -2,6 +2,7 @@
 // own pf-localization app.
 #include "cli_helpers.h"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -70,6 +71,25 @@ std::optional<Pose> mrptPfLocalization(const fs::path& dir) {
   return last;
 }
 
+/** MRPT's pf-localization draws from an unseeded generator: its end
+ *  differs from run to run (x 15.90-15.94 in most runs on this log, 16.11
+ *  once). The per-coordinate median of three runs is its typical answer. */
+std::optional<Pose> mrptPfLocalizationMedian(const fs::path& dir) {
+  std::vector<Pose> runs;
+  for (int i = 0; i < 3; ++i) {
+    const auto p = mrptPfLocalization(dir / std::to_string(i));
+    if (!p) return std::nullopt;
+    runs.push_back(*p);
+  }
+  auto median = [&](double Pose::*f) {
+    std::vector<double> v;
+    for (const auto& p : runs) v.push_back(p.*f);
+    std::sort(v.begin(), v.end());
+    return v[1];
+  };
+  return Pose{median(&Pose::x), median(&Pose::y), median(&Pose::yaw_deg)};
+}
+
 void expectNear(const Pose& a, const Pose& b) {
   EXPECT_NEAR(a.x, b.x, kTolPos);
   EXPECT_NEAR(a.y, b.y, kTolPos);
@@ -86,7 +106,7 @@ size_t dataLines(const fs::path& p) {
 
 TEST(CliLocalize, GlobalStartEndsWhereMrptPfLocalizationEnds) {
   const auto dir = scratch() / "loc_global";
-  const auto mrpt = mrptPfLocalization(dir / "mrpt");
+  const auto mrpt = mrptPfLocalizationMedian(dir / "mrpt");
   if (!mrpt) GTEST_SKIP() << "MRPT's pf-localization (mrpt-apps) not installed";
   const RunResult r = localize({"--global"}, dir / "out");
   ASSERT_EQ(r.code, 0) << r.err;
