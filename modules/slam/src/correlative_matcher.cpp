@@ -5,6 +5,10 @@
 
 namespace carenav::slam {
 
+namespace {
+constexpr double kDeg = M_PI / 180;
+}  // namespace
+
 void CorrelativeMatcher::setReference(const mrpt::maps::CSimplePointsMap& ref) {
   const auto& xs = ref.getPointsBufferRef_x();
   const auto& ys = ref.getPointsBufferRef_y();
@@ -127,51 +131,60 @@ CorrelativeMatcher::Result CorrelativeMatcher::match(
     const Prior& motion, double widen_xy, double widen_yaw) const {
   widen_xy = std::max(1.0, widen_xy);
   widen_yaw = std::max(1.0, widen_yaw);
-  const double deg = M_PI / 180;
-  const double window_xy = p_.window_xy * widen_xy;
-  const double window_yaw = std::min(180.0, p_.window_yaw * widen_yaw);
-  const double sa = p_.prior_along * widen_xy, sc = p_.prior_across * widen_xy;
-  const double syaw = p_.prior_yaw * widen_yaw * deg;
+  Search q{motion};
+  q.nxy = static_cast<int>(std::round(p_.window_xy * widen_xy / p_.coarse_xy));
+  q.nyaw = static_cast<int>(std::round(std::min(180.0, p_.window_yaw * widen_yaw) / p_.coarse_yaw));
+  q.sa = p_.prior_along * widen_xy;
+  q.sc = p_.prior_across * widen_xy;
+  q.syaw = p_.prior_yaw * widen_yaw * kDeg;
   const auto& sx = scan.getPointsBufferRef_x();
   const auto& sy = scan.getPointsBufferRef_y();
-  std::vector<float> all_x(sx.begin(), sx.end()), all_y(sy.begin(), sy.end());
+  const std::vector<float> all_x(sx.begin(), sx.end()), all_y(sy.begin(), sy.end());
   std::vector<float> cx, cy;
   const size_t stride = std::max<size_t>(1, all_x.size() / std::max<size_t>(1, p_.coarse_points));
   for (size_t i = 0; i < all_x.size(); i += stride) cx.push_back(all_x[i]), cy.push_back(all_y[i]);
+  if (centres.empty()) return Result{};
   // Log-likelihood of the scan: the points' log-likelihood ratios, as many
   // of them independent as `independence` says (the coarse pass sums a
   // subset: scaled to all points).
-  const double w_all = p_.independence;
-  const double w_coarse = cx.empty() ? 0 : p_.independence * all_x.size() / cx.size();
-  Result best;
-  if (centres.empty()) return best;
-  const int nxy = static_cast<int>(std::round(window_xy / p_.coarse_xy));
-  const int nyaw = static_cast<int>(std::round(window_yaw / p_.coarse_yaw));
+  q.weight = cx.empty() ? 0 : p_.independence * all_x.size() / cx.size();
+  const mrpt::poses::CPose2D coarse = coarsePass(q, cx, cy, centres);
+  q.weight = p_.independence;
+  Result best = finePass(q, all_x, all_y, coarse);
+  best.closeness = closeness(all_x, all_y, best.pose.x(), best.pose.y(), best.pose.phi());
+  return best;
+}
+
+mrpt::poses::CPose2D CorrelativeMatcher::coarsePass(
+    const Search& q, const std::vector<float>& cx, const std::vector<float>& cy,
+    const std::vector<mrpt::poses::CPose2D>& centres) const {
+  // The coarse step is a whole number of table cells, so for each yaw the
+  // scan points are rotated and turned into cell indices once, and every
+  // translation of the window is an integer offset of those indices
+  // ([Olson09csm, Sec. IV]: the rotation is the only costly part of
+  // evaluating a pose).
+  const int nxy = q.nxy;
   const double cells_per_step = p_.coarse_xy / p_.cell;
   const int step = static_cast<int>(std::lround(cells_per_step));
   const bool integer_steps = step >= 1 && std::abs(cells_per_step - step) < 1e-6;
   std::vector<int> gx(cx.size()), gy(cx.size());
   std::vector<double> sums((2 * nxy + 1) * (2 * nxy + 1));
   double bx = centres[0].x(), by = centres[0].y(), byaw = centres[0].phi(), top = -1e300;
-  // Coarse pass over the window around each centre. The coarse step is a
-  // whole number of table cells, so for each yaw the scan points are rotated
-  // and turned into cell indices once, and every translation of the window
-  // is an integer offset of those indices ([Olson09csm, Sec. IV]: the
-  // rotation is the only costly part of evaluating a pose).
-  for (const auto& prior : centres)
-    for (int a = -nyaw; a <= nyaw; ++a) {
-      const double yaw = prior.phi() + a * p_.coarse_yaw * deg;
-      const double yaw_prior = logPriorYaw(motion, yaw, syaw);
-      const double mid = travelDirection(motion, yaw);
+  for (const auto& centre : centres)
+    for (int a = -q.nyaw; a <= q.nyaw; ++a) {
+      const double yaw = centre.phi() + a * p_.coarse_yaw * kDeg;
+      const double yaw_prior = logPriorYaw(q.motion, yaw, q.syaw);
+      const double mid = travelDirection(q.motion, yaw);
       const double mc = std::cos(mid), ms = std::sin(mid);
       auto consider = [&](double sum, double x, double y) {
-        const double post = w_coarse * sum + yaw_prior + logPriorXY(motion, x, y, mc, ms, sa, sc);
+        const double post =
+            q.weight * sum + yaw_prior + logPriorXY(q.motion, x, y, mc, ms, q.sa, q.sc);
         if (post > top) top = post, bx = x, by = y, byaw = yaw;
       };
       if (!integer_steps) {
         for (int i = -nxy; i <= nxy; ++i)
           for (int j = -nxy; j <= nxy; ++j) {
-            const double x = prior.x() + i * p_.coarse_xy, y = prior.y() + j * p_.coarse_xy;
+            const double x = centre.x() + i * p_.coarse_xy, y = centre.y() + j * p_.coarse_xy;
             consider(score(cx, cy, x, y, yaw), x, y);
           }
         continue;
@@ -179,33 +192,39 @@ CorrelativeMatcher::Result CorrelativeMatcher::match(
       const double c = std::cos(yaw), s = std::sin(yaw);
       for (size_t k = 0; k < cx.size(); ++k) {
         gx[k] = static_cast<int>(
-            std::floor((prior.x() + c * cx[k] - s * cy[k] - x0_) / p_.cell + 1e-9));
+            std::floor((centre.x() + c * cx[k] - s * cy[k] - x0_) / p_.cell + 1e-9));
         gy[k] = static_cast<int>(
-            std::floor((prior.y() + s * cx[k] + c * cy[k] - y0_) / p_.cell + 1e-9));
+            std::floor((centre.y() + s * cx[k] + c * cy[k] - y0_) / p_.cell + 1e-9));
       }
       windowSums(gx, gy, nxy, step, sums);
       for (int i = -nxy; i <= nxy; ++i)
         for (int j = -nxy; j <= nxy; ++j)
-          consider(sums[(j + nxy) * (2 * nxy + 1) + (i + nxy)], prior.x() + i * p_.coarse_xy,
-                   prior.y() + j * p_.coarse_xy);
+          consider(sums[(j + nxy) * (2 * nxy + 1) + (i + nxy)], centre.x() + i * p_.coarse_xy,
+                   centre.y() + j * p_.coarse_xy);
     }
-  // Fine pass around the coarse optimum, all points.
-  const double fx = bx, fy = by, fyaw = byaw;
-  top = -1e300;
+  return mrpt::poses::CPose2D(bx, by, byaw);
+}
+
+CorrelativeMatcher::Result CorrelativeMatcher::finePass(const Search& q,
+                                                        const std::vector<float>& xs,
+                                                        const std::vector<float>& ys,
+                                                        const mrpt::poses::CPose2D& start) const {
+  // A quarter of the coarse step, four of them each side, all points.
+  double bx = start.x(), by = start.y(), byaw = start.phi(), top = -1e300;
   for (int a = -4; a <= 4; ++a) {
-    const double yaw = fyaw + a * p_.coarse_yaw / 4 * deg;
+    const double yaw = start.phi() + a * p_.coarse_yaw / 4 * kDeg;
     for (int i = -4; i <= 4; ++i)
       for (int j = -4; j <= 4; ++j) {
-        const double x = fx + i * p_.coarse_xy / 4, y = fy + j * p_.coarse_xy / 4;
+        const double x = start.x() + i * p_.coarse_xy / 4, y = start.y() + j * p_.coarse_xy / 4;
         const double post =
-            w_all * score(all_x, all_y, x, y, yaw) + logPrior(motion, x, y, yaw, sa, sc, syaw);
+            q.weight * score(xs, ys, x, y, yaw) + logPrior(q.motion, x, y, yaw, q.sa, q.sc, q.syaw);
         if (post > top) top = post, bx = x, by = y, byaw = yaw;
       }
   }
-  best.pose = mrpt::poses::CPose2D(bx, by, byaw);
-  best.log_posterior = top;
-  best.closeness = closeness(all_x, all_y, bx, by, byaw);
-  return best;
+  Result r;
+  r.pose = mrpt::poses::CPose2D(bx, by, byaw);
+  r.log_posterior = top;
+  return r;
 }
 
 }  // namespace carenav::slam

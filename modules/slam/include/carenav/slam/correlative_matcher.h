@@ -112,6 +112,23 @@ class CorrelativeMatcher {
    *  ratios turned back into closeness). */
   double closeness(const std::vector<float>& xs, const std::vector<float>& ys, double x, double y,
                    double yaw) const;
+  /** One search: the motion prior, its standard deviations (m, m, rad),
+   *  the window's half-widths in coarse steps, and the weight of a point's
+   *  log-likelihood ratio. */
+  struct Search {
+    const Prior& motion;
+    double sa = 0, sc = 0, syaw = 0;
+    int nxy = 0, nyaw = 0;
+    double weight = 0;
+  };
+  /** The best pose of the coarse grid over the windows around `centres`
+   *  (the scan's subset cx, cy). */
+  mrpt::poses::CPose2D coarsePass(const Search& q, const std::vector<float>& cx,
+                                  const std::vector<float>& cy,
+                                  const std::vector<mrpt::poses::CPose2D>& centres) const;
+  /** The best pose of the fine grid around `start` (all points). */
+  Result finePass(const Search& q, const std::vector<float>& xs, const std::vector<float>& ys,
+                  const mrpt::poses::CPose2D& start) const;
   double lookup(double x, double y) const;
   /** sums[(j + nxy) (2 nxy + 1) + (i + nxy)]: the table summed over the
    *  cells (gx[k] + i step, gy[k] + j step) of every point k inside it, for
