@@ -223,7 +223,6 @@ CorrelativeMatcher::Result CorrelativeMatcher::finePass(const Search& q,
   }
   Result r;
   r.pose = mrpt::poses::CPose2D(bx, by, byaw);
-  r.log_posterior = top;
   return r;
 }
 

@@ -247,17 +247,13 @@ class GraphMapper : public Mapper {
     double goodness = 0;
     mrpt::math::CMatrixDouble33 cov;
     bool consistent = true;  ///< within the motion prior's gate
-    bool searched = false;   ///< `start` is a correlative search's pose
-    CPose2D start;           ///< where ICP started
+    CPose2D start;           ///< the correlative search's pose ICP started from
   };
 
-  /** ICP of the current scan against the submap from `predicted`. Without
-   *  odometry the prediction (constant velocity) can be far off: real logs
-   *  turn 20-60 deg between scans (the Intel CARMEN log). Then a few more
-   *  starting points are tried (no motion, and both rotated by +-20 and
-   *  +-40 deg), with a wide first pairing distance, and the best match kept. */
-  Match matchToSubmap(const CPose2D& predicted, bool search) {
-    if (!search) return refine(predicted, 0, false);
+  /** The laser-only match of the current scan against the submap, from the
+   *  constant-velocity prediction `predicted`: a correlative search, then
+   *  ICP (the comments below say how the search is made). */
+  Match matchToSubmap(const CPose2D& predicted) {
     // Without odometry the prediction (constant velocity) can be a metre
     // and tens of degrees off: real logs turn 20-60 deg between scans (the
     // Intel and CSAIL CARMEN logs). A correlative search over a window
@@ -277,13 +273,13 @@ class GraphMapper : public Mapper {
       double sc = 0;
       const double widen = 1.0 + std::min<size_t>(lost_, 2);
       const CPose2D start = correlative_.match(*current_points_, pose_, &sc, widen, widen);
-      return refine(start, sc, true);
+      return refine(start, sc);
     }
     const double advance = std::copysign(last_increment_.norm(), last_increment_.x());
     const CorrelativeMatcher::Prior prior{pose_, advance, {predicted.phi(), pose_.phi()}};
     const CorrelativeMatcher::Result c =
         correlative_.match(*current_points_, {predicted, pose_}, prior);
-    Match best = refine(c.pose, c.closeness, true);
+    Match best = refine(c.pose, c.closeness);
     if (best.goodness < cfg_.slam.min_icp_goodness) {
       // A weak match: the robot may have turned more than the window (CSAIL
       // log: 65 deg between two scans). Search three times the heading window
@@ -302,7 +298,7 @@ class GraphMapper : public Mapper {
           double sc = 0;
           const CPose2D centre(prior.x(), prior.y(), prior.phi() + off * kDeg);
           const CPose2D c = correlative_.match(*current_points_, centre, &sc, 2.0, 1.0);
-          const Match wide = refine(c, sc, true);
+          const Match wide = refine(c, sc);
           if (wide.goodness < cfg_.slam.min_icp_goodness || wide.goodness <= best.goodness)
             continue;
           if (recentAgreement(wide.pose) >= kWideMinAgreement) best = wide;
@@ -348,7 +344,7 @@ class GraphMapper : public Mapper {
   /** One step without odometry: the wide search of matchToSubmap from the
    *  constant-velocity prediction. Returns whether matched. */
   bool stepLaserOnly(const CPose2D& guess) {
-    const Match m = matchToSubmap(pose_ + guess, true);
+    const Match m = matchToSubmap(pose_ + guess);
     if (m.goodness >= cfg_.slam.min_icp_goodness) {
       const Match r = refineOnLines(m);
       pose_ = r.pose;
@@ -378,7 +374,7 @@ class GraphMapper : public Mapper {
    *  coarse step and pairs at least kLineMinInliers of the points. */
   Match refineOnLines(const Match& m) const {
     constexpr double kLineMinInliers = 0.3;
-    if (line_icp_.lines() == 0 || !m.searched) return m;
+    if (line_icp_.lines() == 0) return m;
     const auto& cp = correlative_.parameters();
     const PoseGaussian prior(m.start, diagCov(cp.coarse_xy, cp.coarse_yaw * kDeg));
     const LineIcp::Result r = line_icp_.align(*current_points_, m.pose, &prior);
@@ -419,18 +415,16 @@ class GraphMapper : public Mapper {
     return agree + conflict > 0 ? static_cast<double>(agree) / (agree + conflict) : 0.0;
   }
 
-  /** ICP from `start` (a correlative match of score `start_score` when
-   *  `searched`). */
-  Match refine(const CPose2D& start, double start_score, bool searched) {
+  /** ICP from `start`, a correlative match of score `start_score`. */
+  Match refine(const CPose2D& start, double start_score) {
     Match best;
-    best.searched = searched;
     best.start = start;
     mrpt::slam::CICP::TReturnInfo info;
     auto pdf = icp_.Align(&submap_, current_points_.get(), start, info);
     best.goodness = info.goodness;
     best.pose = pdf->getMeanVal();
     pdf->getCovariance(best.cov);
-    if (searched && best.goodness < cfg_.slam.min_icp_goodness && start_score >= 0.5) {
+    if (best.goodness < cfg_.slam.min_icp_goodness && start_score >= 0.5) {
       // ICP lost its pairs (thresholds too tight for this scan) but the
       // correlative match is sound: keep it, with its coarse uncertainty.
       best.pose = start;

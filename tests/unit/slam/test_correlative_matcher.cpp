@@ -54,6 +54,17 @@ TEST(CorrelativeMatcher, RecoversAPoseFarFromThePrior) {
 }
 
 namespace {
+/** What `carenav import carmen LOG --odometry none --out DIR/NAME.rawlog`
+ *  does for the CARMEN log NAME of the test data (the reference poses go to
+ *  DIR/NAME.tum). */
+io::CarmenImportStats importLaserOnly(const std::string& name, const std::filesystem::path& dir) {
+  io::CarmenImportOptions import;
+  import.input = std::string(CARENAV_TEST_DATA) + "/carmen/" + name + "-corrected.log.gz";
+  import.output = (dir / (name + ".rawlog")).string();
+  import.odometry = io::CarmenOdometry::None;
+  return io::importCarmen(import);
+}
+
 /** Two walls 2 m apart along the x axis (y = +-1), every 2 cm, from x = -20
  *  to 20: a corridor whose scan fixes y and heading but not x. */
 CSimplePointsMap corridorAlongX() {
@@ -123,12 +134,7 @@ TEST(CorrelativeMatcher, MatchesConsecutiveScansOfTheIntelLog) {
       std::filesystem::temp_directory_path() / ("carenav_cm_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string rawlog = (dir / "intel.rawlog").string();
-  // What `carenav import carmen LOG --odometry none --out X.rawlog` does.
-  io::CarmenImportOptions import;
-  import.input = log;
-  import.output = rawlog;
-  import.odometry = io::CarmenOdometry::None;
-  const io::CarmenImportStats stats = io::importCarmen(import);
+  const io::CarmenImportStats stats = importLaserOnly("intel", dir);
   ASSERT_GT(stats.observations, 280u);
   ASSERT_EQ(stats.tum, (dir / "intel.tum").string());
   const auto ref = io::readTum((dir / "intel.tum").string());
@@ -164,17 +170,12 @@ namespace {
 /** ATE (m, by index) of `carenav slam` (icp-graph) on a CARMEN log of the
  *  test data imported laser only, with `slam` as the [slam] parameters. */
 double laserOnlyAte(const std::string& name, const slam::SlamParams& params) {
-  const std::string log = std::string(CARENAV_TEST_DATA) + "/carmen/" + name + "-corrected.log.gz";
   const auto dir = std::filesystem::temp_directory_path() /
                    ("carenav_cm_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  io::CarmenImportOptions import;
-  import.input = log;
-  import.output = (dir / (name + ".rawlog")).string();
-  import.odometry = io::CarmenOdometry::None;
-  io::importCarmen(import);
+  importLaserOnly(name, dir);
   slam::SlamJobOptions o;
-  o.rawlog = import.output;
+  o.rawlog = (dir / (name + ".rawlog")).string();
   o.out_dir = (dir / "map").string();
   o.method = "icp-graph";
   o.progress = false;

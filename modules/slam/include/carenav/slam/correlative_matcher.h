@@ -57,14 +57,12 @@ class CorrelativeMatcher {
     static Prior at(const mrpt::poses::CPose2D& p) { return {p, 0.0, {p.phi()}}; }
   };
 
-  /** A match: the pose of the posterior's mode in the window, the mean
+  /** A match: the pose of the posterior's mode in the window and the mean
    *  closeness of the scan points there (in [0, 1]: 1 = every point on a
-   *  reference point) and the log posterior (up to a constant), comparable
-   *  between matches of the same scan. */
+   *  reference point). */
   struct Result {
     mrpt::poses::CPose2D pose;
     double closeness = 0;
-    double log_posterior = -1e300;
   };
 
   explicit CorrelativeMatcher(const Parameters& p) : p_(p) {}
