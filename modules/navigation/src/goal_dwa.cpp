@@ -74,6 +74,7 @@ class GoalDwa final : public LocalPlanner {
       out.mark(PlanStatus::TurnInPlace);
     }
     const double cap = d_.clearance_influence;
+    const double now_off = routeOffset(path, in.pose);
     auto evaluate = [&](const std::vector<Twist>& candidates) {
       double best = std::numeric_limits<double>::infinity();
       for (const Twist& s : candidates) {
@@ -96,11 +97,16 @@ class GoalDwa final : public LocalPlanner {
         const MotionState* ms = in.motion ? &*in.motion : nullptr;
         if (!tr.leaves_map && brakes &&
             brakingScale(*in.map, in.pose, s, r_, d_.sim_step, r_.safe_distance, ms) >= 1.0) {
-          ++out.admissible;
           const double ts = std::min(g_.score_time, d_.sim_time);
           // the distance to the route where it has reached the goal, if it does within ts
           const double te = arrives(in, to_goal, s, ts) ? to_goal / std::abs(s.v) : ts;
           const TPose2D e = motion ? motion->pose(te) : integrateArc(in.pose, s.v, s.w, te);
+          // ... and it does not end where the robot could neither go on nor turn
+          if (std::abs(s.v) > 1e-6 && !turnableAt(in, path, e, now_off)) {
+            out.trajectories.push_back(tr);
+            continue;
+          }
+          ++out.admissible;
           const double heading_err =
               headingError(in, path, to_goal, target_heading, s, motion ? &*motion : nullptr, ts);
           const double path_dist = distanceToPath(path, e.x, e.y);
@@ -118,6 +124,8 @@ class GoalDwa final : public LocalPlanner {
       }
     };
     evaluate(samples);
+    const bool forward = out.ok && std::abs(out.cmd.v) > 1e-6;
+    if (!forward && !turnableAt(in, path, in.pose, 0.0)) out.wedged = true;
     if (!out.ok && !turn_only) {
       // Nothing moves forward safely: turn on the spot towards the route.
       std::vector<Twist> turns;
@@ -127,6 +135,7 @@ class GoalDwa final : public LocalPlanner {
       if (out.ok) out.mark(PlanStatus::TurnInPlace, "turn in place (blocked ahead)");
     }
     if (!out.ok) out.mark(PlanStatus::NoAdmissible);
+    if (out.wedged) out.note += out.note.empty() ? "wedged" : " (wedged)";
     commit(out);
     return out;
   }
@@ -208,6 +217,30 @@ class GoalDwa final : public LocalPlanner {
     }
     return std::abs(committed(needed) - turned);
   }
+  /** rad, how far the heading of `p` is off the way the route goes on from
+   *  its position (towards the look-ahead point from there). */
+  double routeOffset(const std::vector<TPoint2D>& path, const TPose2D& p) const {
+    const TPoint2D t = lookaheadPoint(path, p.x, p.y, g_.lookahead, corner_);
+    if (std::hypot(t.x - p.x, t.y - p.y) < 1e-6) return 0;
+    return angleDiff(std::atan2(t.y - p.y, t.x - p.x), p.phi);
+  }
+  /** False when the pose `e`, where a candidate's critics are taken, faces
+   *  the route's way on by more than `align_deg` and by more than the robot
+   *  faces it now (`now_off`, rad), and the footprint cannot turn on the spot
+   *  there to within `align_deg` of it: a place from which the robot could
+   *  neither go on nor turn (a post beside the mouth of a gap it reached
+   *  skewed). Reaching it is left to the candidates that keep it turnable. */
+  bool turnableAt(const PlannerInput& in, const std::vector<TPoint2D>& path, const TPose2D& e,
+                  double now_off) const {
+    if (g_.align_deg >= 180 ||
+        (in.goal && std::hypot(in.goal->x - e.x, in.goal->y - e.y) < goal_tol_))
+      return true;
+    const double tol = mrpt::DEG2RAD(g_.align_deg);
+    const double off = routeOffset(path, e);
+    if (std::abs(off) <= std::max(tol, std::abs(now_off) + 1e-9)) return true;
+    return turnFree(*in.map, e, off - std::copysign(tol, off));  // to the tolerance's edge
+  }
+
   /** The turn `needed` (rad, within +-pi) the way the last turn on the spot
    *  went, when that way is longer by less than k_switch / k_heading: with
    *  the target near behind, the shorter side flips with every small change

@@ -169,6 +169,14 @@ double CommandMotion::turned(double t) const {
   return knots_[std::min(i, knots_.size() - 1)].turned;
 }
 
+bool turnFree(const LocalCostmap& map, const TPose2D& pose, double turn) {
+  constexpr double kStep = 0.1;  // rad between footprint samples
+  const int n = std::max(1, static_cast<int>(std::ceil(std::abs(turn) / kStep)));
+  for (int i = 0; i <= n; ++i)
+    if (map.check({pose.x, pose.y, pose.phi + turn * i / n}).collision) return false;
+  return true;
+}
+
 double marginTime(const Twist& cmd, double margin, double sweep_radius) {
   const double av = std::abs(cmd.v), aw = std::abs(cmd.w);
   if (av > 0) return margin / av;

@@ -73,7 +73,10 @@ const ParamTable<GoalDwaParams>& GoalDwaParams::table() {
           .real("corner_deg", &P::corner_deg, "deg", 0, 180,
                 "the look-ahead does not cut a route vertex turning more than this "
                 "(the approach point of a doorway: the robot enters on its axis); 0: cut every "
-                "corner");
+                "corner")
+          .real("align_deg", &P::align_deg, "deg", 0, 180,
+                "a candidate ends facing the route's way on within this, or where its footprint "
+                "can turn on the spot to it, or no worse than now (180: no such rule)");
   return t;
 }
 

@@ -333,7 +333,7 @@ Navigator::Cycle Navigator::cycle(double now) {
     // Recovery behaviours (goal robots): boxed in or no progress.
     if (goal_ && !planner_->needsUserIntent()) {
       recovery_.recordPose(pose);
-      const bool blocked = !c.plan.ok || blocked_;
+      const bool blocked = !c.plan.ok || c.plan.wedged || blocked_;
       if (auto r = recovery_.step(now, in, c.plan, blocked, routeLeft(in.path, pose.x, pose.y))) {
         c.plan = *r;
         c.recovery = Recovery::phaseName(recovery_.phase());

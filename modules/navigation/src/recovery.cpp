@@ -24,6 +24,11 @@ double distanceToPoses(const std::vector<TPose2D>& path, double x, double y) {
 constexpr double kPathSpacing = 0.03;
 /** Pure-pursuit look-ahead when backing out along the recorded path (m). */
 constexpr double kBackLookahead = 0.3;
+/** Facing the route within this, a turn is done (rad: 15 deg). */
+constexpr double kFacing = 15.0 * M_PI / 180.0;
+/** A back-out that has not yet reached a place where the robot can turn to
+ *  face the route goes on up to this many times `backup_distance`. */
+constexpr double kTurnableBackups = 3.0;
 
 }  // namespace
 
@@ -201,22 +206,32 @@ std::optional<Twist> Recovery::backOutCommand(const LocalCostmap& map, const TPo
   return std::nullopt;
 }
 
-std::optional<Twist> Recovery::spinCommand(const PlannerInput& in) const {
-  if (!in.map) return std::nullopt;
-  double err = 0;
+double Recovery::routeError(const PlannerInput& in) const {
   if (!in.path.empty()) {
     const TPoint2D t = lookaheadPoint(in.path, in.pose.x, in.pose.y, nav_.lookahead);
-    err = angleDiff(std::atan2(t.y - in.pose.y, t.x - in.pose.x), in.pose.phi);
-  } else if (in.goal) {
-    err = angleDiff(std::atan2(in.goal->y - in.pose.y, in.goal->x - in.pose.x), in.pose.phi);
+    return angleDiff(std::atan2(t.y - in.pose.y, t.x - in.pose.x), in.pose.phi);
   }
+  if (in.goal)
+    return angleDiff(std::atan2(in.goal->y - in.pose.y, in.goal->x - in.pose.x), in.pose.phi);
+  return 0;
+}
+
+bool Recovery::canFaceRoute(const PlannerInput& in) const {
+  const double err = routeError(in);
+  if (std::abs(err) <= kFacing) return true;
+  return in.map && turnFree(*in.map, in.pose, err - std::copysign(kFacing, err));
+}
+
+std::optional<Twist> Recovery::spinCommand(const PlannerInput& in, bool toward_only) const {
+  if (!in.map) return std::nullopt;
+  const double err = routeError(in);
   const double w = 0.5 * r_.w_max;
   const double dir0 = spin_dir_ != 0 ? spin_dir_ : (err >= 0 ? 1.0 : -1.0);
   const double angle =
       std::min(mrpt::DEG2RAD(20.0), std::min(mrpt::DEG2RAD(p_.spin_deg), M_PI) - spun_);
   if (angle <= 0) return std::nullopt;
   for (const double dir : {dir0, -dir0}) {
-    if (spin_dir_ != 0 && dir != spin_dir_) break;  // a turn keeps its direction
+    if ((spin_dir_ != 0 || toward_only) && dir != dir0) break;  // a turn keeps its direction
     const Twist cmd{0, dir * w};
     const Trajectory tr = rollout(*in.map, in.pose, cmd, angle / w, nav_.sim_step / 2, 0.0);
     if (tr.admissible() && brakingScale(*in.map, in.pose, cmd, r_, nav_.sim_step, p_.backup_margin,
@@ -260,6 +275,7 @@ void Recovery::start(double now, const PlannerInput& in, const std::string& why)
   phase_t0_ = now;
   last_pose_ = in.pose;
   backed_ = spun_ = spin_dir_ = 0;
+  facing_ = false;
   blocked_since_.reset();
   if (in.map && backOutCommand(*in.map, in.pose)) {
     phase_ = Phase::BackUp;
@@ -334,9 +350,14 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
   if (phase_ == Phase::BackUp) {
     backed_ += std::hypot(in.pose.x - last_pose_.x, in.pose.y - last_pose_.y);
     last_pose_ = in.pose;
+    // At least backup_distance times the attempt, and on to where the
+    // robot can turn to face the route (a robot backed out of a gap's mouth
+    // by less came straight back into it skewed).
     const double target = p_.backup_distance * std::min(attempts_, 3);
+    const bool further =
+        backed_ < target || (backed_ < kTurnableBackups * p_.backup_distance && !canFaceRoute(in));
     std::optional<Twist> c;
-    if (backed_ < target && in.map) c = backOutCommand(*in.map, in.pose);
+    if (further && in.map) c = backOutCommand(*in.map, in.pose);
     if (c) return command(*c, "recovery (" + reason_ + "): back out");
     if (backed_ < 0.05) {
       // could not back out after all: turn or wait instead
@@ -347,6 +368,11 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
         phase_ = Phase::Wait;
         phase_t0_ = now;
       }
+    } else if (std::abs(routeError(in)) > kFacing && spinCommand(in, true)) {
+      // face the route before the planner resumes: it enters straight
+      phase_ = Phase::Spin;
+      spun_ = spin_dir_ = 0;
+      facing_ = true;
     } else {
       finish(now);
       return command({0, 0}, "recovery (" + reason_ + "): backed out, replanning");
@@ -355,15 +381,10 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
   if (phase_ == Phase::Spin) {
     spun_ += std::abs(angleDiff(in.pose.phi, last_pose_.phi));
     last_pose_ = in.pose;
-    double err = 0;
-    if (!in.path.empty()) {
-      const TPoint2D t = lookaheadPoint(in.path, in.pose.x, in.pose.y, nav_.lookahead);
-      err = angleDiff(std::atan2(t.y - in.pose.y, t.x - in.pose.x), in.pose.phi);
-    }
     std::optional<Twist> c;
-    if (std::abs(err) > mrpt::DEG2RAD(15.0) || spun_ < 0.05) c = spinCommand(in);
+    if (std::abs(routeError(in)) > kFacing || spun_ < 0.05) c = spinCommand(in, facing_);
     if (c) return command(*c, "recovery (" + reason_ + "): turn");
-    if (spun_ < 0.05) {
+    if (spun_ < 0.05 && !facing_) {
       phase_ = Phase::Wait;
       phase_t0_ = now;
     } else {

@@ -564,3 +564,96 @@ TEST(GoalDwa, ArrivesAtTheGoalAt2MetresPerSecondAndStopsWithinTheTolerance) {
 
 }  // namespace
 }  // namespace carenav::navigation
+
+namespace carenav::navigation {
+namespace {
+
+/** A 0.15 m post whose centre lies at (x, y) in the frame of `robot`. */
+void postAhead(std::vector<TPoint2D>& out, const TPose2D& robot, double x, double y) {
+  const double c = std::cos(robot.phi), s = std::sin(robot.phi);
+  for (double u = -0.075; u <= 0.075 + 1e-9; u += 0.02)
+    for (double v = -0.075; v <= 0.075 + 1e-9; v += 0.02)
+      out.push_back({robot.x + c * (x + u) - s * (y + v), robot.y + s * (x + u) + c * (y + v)});
+}
+
+/** The wedge at a gap's mouth (the clutter benchmark's timeouts): the robot
+ *  came in 40 deg skewed to a route going east, a post 3 cm before the left
+ *  half of its front. Forward touches the post; turning right to the route
+ *  swings the front into it. */
+struct Wedge {
+  NavigationParams nav;
+  RobotParams r = fastRobotAt(0.5);
+  TPose2D pose{0, 0, 0.7};
+  std::vector<TPoint2D> obs;
+  std::vector<TPoint2D> route{{-1.5, 0}, {0, 0}, {3, 0}};
+  Wedge() { postAhead(obs, pose, 0.255 + 0.03 + 0.075, 0.1); }
+};
+
+TEST(GoalDwa, SaysItIsWedgedWhenItCanNeitherGoOnNorTurnToTheRoute) {
+  Wedge w;
+  LocalCostmap map(w.nav, Footprint(w.r.footprint, w.nav.resolution));
+  map.build({0, 0}, w.obs);
+  PlannerInput in;
+  in.map = &map;
+  in.pose = w.pose;
+  in.path = w.route;
+  in.goal = TPose2D{3, 0, 0};
+  const PlannerOutput o = makeGoalDwa(w.nav, w.r)->plan(in);
+  EXPECT_TRUE(o.wedged) << o.note;
+  EXPECT_FALSE(o.ok && std::abs(o.cmd.v) > 1e-6) << "moved " << o.cmd.v;
+  // Without the post it turns to the route: not wedged.
+  LocalCostmap open(w.nav, Footprint(w.r.footprint, w.nav.resolution));
+  open.build({0, 0}, {{-3, 3}});
+  in.map = &open;
+  EXPECT_FALSE(makeGoalDwa(w.nav, w.r)->plan(in).wedged);
+  // Nor when it faces the route (it can go on).
+  in.map = &map;
+  in.pose = {-0.6, 0, 0};
+  EXPECT_FALSE(makeGoalDwa(w.nav, w.r)->plan(in).wedged);
+}
+
+TEST(Recovery, BacksOutOfAWedgeUntilItCanTurnAndFacesTheRouteBeforeReplanning) {
+  // The robot came up skewed along y = x * tan(0.7) and is wedged (Wedge):
+  // backing out by backup_distance and handing back to the planner sent it
+  // straight back into the mouth skewed, over and over. It backs out to
+  // where its footprint can turn and turns to face the route first.
+  Wedge w;
+  RecoveryParams rp;
+  Recovery rec(rp, w.r, w.nav);
+  LocalCostmap map(w.nav, Footprint(w.r.footprint, w.nav.resolution));
+  map.build({0, 0}, w.obs);
+  for (double d = -1.5; d <= 1e-9; d += 0.02)
+    rec.recordPose({d * std::cos(0.7), d * std::sin(0.7), 0.7});
+  PlannerInput in;
+  in.map = &map;
+  in.pose = w.pose;
+  in.path = w.route;
+  PlannerOutput wedged;
+  wedged.ok = true;
+  wedged.cmd = {0, 0.3};
+  wedged.wedged = true;
+  double t = 0;
+  size_t reversing = 0;
+  bool replanned = false;
+  for (int k = 0; k < 200 && !replanned; ++k, t += 0.1) {
+    const auto o = rec.step(t, in, wedged, true, 5.0);
+    if (!o) continue;
+    ASSERT_TRUE(o->ok) << o->note;
+    reversing += o->cmd.v < 0;
+    EXPECT_GE(brakingScale(map, in.pose, o->cmd, w.r, w.nav.sim_step, rp.backup_margin), 1.0);
+    in.pose = move(in.pose, o->cmd, 0.1);
+    ASSERT_FALSE(map.check(in.pose).collision) << "t " << t;
+    replanned = rec.takeReplanRequest();
+  }
+  ASSERT_TRUE(replanned);
+  EXPECT_GT(reversing, 0u);
+  // It faces the route (its look-ahead point, 1 m on) within 15 deg.
+  const TPoint2D ahead = lookaheadPoint(w.route, in.pose.x, in.pose.y, w.nav.lookahead);
+  const double off =
+      std::remainder(std::atan2(ahead.y - in.pose.y, ahead.x - in.pose.x) - in.pose.phi, 2 * M_PI);
+  EXPECT_LE(std::abs(off), 15.0 * M_PI / 180 + 0.02) << "heading " << in.pose.phi;
+  EXPECT_EQ(rec.recoveries(), 1u);
+}
+
+}  // namespace
+}  // namespace carenav::navigation

@@ -105,6 +105,10 @@ Trajectory rollout(const LocalCostmap& map, const TPose2D& start, const Twist& c
 Trajectory rollout(const LocalCostmap& map, const CommandMotion& motion, const Twist& cmd,
                    double horizon, double step, double clearance_cap, double check_distance = 0);
 
+/** True when the footprint at `pose`, turned on the spot by `turn` rad
+ *  (either sign), touches nothing on `map` (samples every 0.1 rad). */
+bool turnFree(const LocalCostmap& map, const TPose2D& pose, double turn);
+
 /** s of `cmd` that cover `margin` metres: of path when it moves; of a
  *  corner's travel (the turn times `sweep_radius`, the footprint's
  *  circumscribed radius) when it turns on the spot; 0 for a turn without a
@@ -163,6 +167,10 @@ struct PlannerOutput {
    *  (its braking rule); negative: the robot's safe_distance. A recovery's
    *  crawl out of a wedge asks for its smaller backup_margin. */
   double margin = -1;
+  /** The robot can neither go on nor turn on the spot to face the way the
+   *  route goes on (goal-dwa): held, as when nothing is admissible, so the
+   *  recoveries back it out instead of a dither of small turns. */
+  bool wedged = false;
   size_t evaluated = 0, admissible = 0;
   std::vector<Trajectory> trajectories;  ///< every candidate (for pictures and tests)
 };

@@ -55,6 +55,7 @@ struct GoalDwaParams {
   double score_time = 1.5;        ///< s, critics are taken at the pose reached then
   double lookahead = 1.0;         ///< m, waypoint distance along the path ahead of the robot
   double corner_deg = 10;         ///< deg, goes to route vertices turning more (0: cuts all)
+  double align_deg = 20;  ///< deg, facing the route within this, or able to turn to it (180: off)
   static const ParamTable<GoalDwaParams>& table();
 };
 

@@ -95,7 +95,15 @@ class Recovery {
   void start(double now, const PlannerInput& in, const std::string& why);
   void finish(double now);
   PlannerOutput command(const Twist& cmd, const std::string& note) const;
-  std::optional<Twist> spinCommand(const PlannerInput& in) const;
+  /** A turn on the spot towards the route where the footprint's sweep is
+   *  free, else the other way unless `toward_only`. */
+  std::optional<Twist> spinCommand(const PlannerInput& in, bool toward_only = false) const;
+  /** rad, the turn from the robot's heading to the way the route goes on
+   *  (to its look-ahead point; to the goal without a route). */
+  double routeError(const PlannerInput& in) const;
+  /** True when the robot faces the route within kFacing, or its footprint
+   *  can turn on the spot to within kFacing of it. */
+  bool canFaceRoute(const PlannerInput& in) const;
   size_t nearestIndex(const TPose2D& pose) const;
 
   RecoveryParams p_;
@@ -125,6 +133,7 @@ class Recovery {
   double phase_t0_ = 0;
   TPose2D phase_pose_;
   double backed_ = 0, spun_ = 0, spin_dir_ = 0;
+  bool facing_ = false;  // the spin turns to face the route after a back-out
   TPose2D last_pose_;
   // the robot's dynamics of the cycle under way (PlannerInput::motion): the
   // supervisor judges a recovery's command from it, so the recovery does too
