@@ -287,13 +287,14 @@ void Recovery::start(double now, const PlannerInput& in, const std::string& why)
   }
 }
 
+void Recovery::cutRetraced() {
+  const size_t i = nearestIndex(last_pose_);
+  path_.resize(std::min(path_.size(), i + 1));
+  path_odo_.resize(path_.size());
+}
+
 void Recovery::finish(double now) {
-  if (phase_ == Phase::BackUp) {
-    // the retraced part of the path is behind no more
-    const size_t i = nearestIndex(last_pose_);
-    path_.resize(std::min(path_.size(), i + 1));
-    path_odo_.resize(path_.size());
-  }
+  if (phase_ == Phase::BackUp) cutRetraced();
   phase_ = Phase::Idle;
   replan_ = true;
   best_t_ = now;  // the planner gets a fresh window
@@ -370,6 +371,7 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
       }
     } else if (std::abs(routeError(in)) > kFacing && spinCommand(in, true)) {
       // face the route before the planner resumes: it enters straight
+      cutRetraced();
       phase_ = Phase::Spin;
       spun_ = spin_dir_ = 0;
       facing_ = true;

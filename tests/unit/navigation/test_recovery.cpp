@@ -653,6 +653,9 @@ TEST(Recovery, BacksOutOfAWedgeUntilItCanTurnAndFacesTheRouteBeforeReplanning) {
       std::remainder(std::atan2(ahead.y - in.pose.y, ahead.x - in.pose.x) - in.pose.phi, 2 * M_PI);
   EXPECT_LE(std::abs(off), 15.0 * M_PI / 180 + 0.02) << "heading " << in.pose.phi;
   EXPECT_EQ(rec.recoveries(), 1u);
+  // The retraced part of the recorded path is cut: it ends where the robot is.
+  ASSERT_FALSE(rec.path().empty());
+  EXPECT_LT(std::hypot(rec.path().back().x - in.pose.x, rec.path().back().y - in.pose.y), 0.1);
 }
 
 }  // namespace

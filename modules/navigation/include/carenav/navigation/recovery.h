@@ -94,6 +94,9 @@ class Recovery {
  private:
   void start(double now, const PlannerInput& in, const std::string& why);
   void finish(double now);
+  /** Ends a back-out: the part of the recorded path it retraced is behind
+   *  the robot no more. */
+  void cutRetraced();
   PlannerOutput command(const Twist& cmd, const std::string& note) const;
   /** A turn on the spot towards the route where the footprint's sweep is
    *  free, else the other way unless `toward_only`. */
