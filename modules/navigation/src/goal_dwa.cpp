@@ -37,35 +37,66 @@ class GoalDwa final : public LocalPlanner {
   bool needsUserIntent() const override { return false; }
   bool usesMotionState() const override { return true; }
 
+  /** The goal is aimed at within half the tolerance (the estimate is off by
+   *  the localisation's error, and a robot that stopped as soon as its
+   *  estimate entered the tolerance ended on its edge); within the tolerance
+   *  where nothing goes on towards it, it is reached where the robot is. */
   PlannerOutput plan(const PlannerInput& in) override {
-    PlannerOutput out;
     const auto route = routeAhead(in);
     if (!route) {
+      PlannerOutput out;
       out.mark(PlanStatus::NoRoute);
       return out;
     }
-    const std::vector<TPoint2D>& path = route->path;
-    const double to_goal = route->to_end;
     const Window win = dynamicWindow(in.current, r_, d_);
-    std::vector<Twist> samples;
-    double target_heading;
-    bool turn_only = false;
-    if (in.goal && to_goal < goal_tol_) {
-      // At the goal: turn to its heading, then stop.
-      target_heading = in.goal->phi;
-      if (std::abs(angleDiff(target_heading, in.pose.phi)) < mrpt::DEG2RAD(goal_tol_deg_)) {
-        out.ok = true;
-        out.mark(PlanStatus::GoalReached);
-        return out;
-      }
-      turn_only = true;
+    const double to_goal = route->to_end;
+    PlannerOutput out;
+    if (in.goal && to_goal < aim()) {
+      out = atGoal(in, route->path, to_goal, win);
     } else {
-      const TPoint2D t = lookaheadPoint(path, in.pose.x, in.pose.y, g_.lookahead, corner_);
-      target_heading = std::atan2(t.y - in.pose.y, t.x - in.pose.x);
-      turn_only =
-          std::abs(angleDiff(target_heading, in.pose.phi)) > mrpt::DEG2RAD(g_.turn_in_place_deg);
+      out = approach(in, route->path, to_goal, win);
+      if (in.goal && to_goal < goal_tol_ && !(out.ok && std::abs(out.cmd.v) > 1e-6))
+        out = atGoal(in, route->path, to_goal, win);
     }
-    samples = candidates(in, win, to_goal, turn_only);
+    commit(out);
+    return out;
+  }
+
+ private:
+  static constexpr double kStopped = 0.01;  // m, braking distance of a robot that has stopped
+  double aim() const { return goal_tol_ / 2; }
+  /** At the goal: brake, turn to its heading, then report it reached once
+   *  the robot has (all but) stopped: it brakes to rest within kStopped. */
+  PlannerOutput atGoal(const PlannerInput& in, const std::vector<TPoint2D>& path, double to_goal,
+                       const Window& win) const {
+    const double target_heading = in.goal->phi;
+    const bool facing =
+        std::abs(angleDiff(target_heading, in.pose.phi)) < mrpt::DEG2RAD(goal_tol_deg_);
+    const double stopping = in.current.v * in.current.v / (2 * std::max(r_.acc_v, 1e-6));
+    if (facing && stopping <= kStopped) {
+      PlannerOutput out;
+      out.ok = true;
+      out.mark(PlanStatus::GoalReached);
+      return out;
+    }
+    return score(in, path, to_goal, win, target_heading, Mode::AtGoal);
+  }
+  /** On the way: towards the look-ahead point on the route. */
+  PlannerOutput approach(const PlannerInput& in, const std::vector<TPoint2D>& path, double to_goal,
+                         const Window& win) const {
+    const TPoint2D t = lookaheadPoint(path, in.pose.x, in.pose.y, g_.lookahead, corner_);
+    const double target_heading = std::atan2(t.y - in.pose.y, t.x - in.pose.x);
+    const bool turn =
+        std::abs(angleDiff(target_heading, in.pose.phi)) > mrpt::DEG2RAD(g_.turn_in_place_deg);
+    return score(in, path, to_goal, win, target_heading, turn ? Mode::Turn : Mode::Drive);
+  }
+  enum class Mode { Drive, Turn, AtGoal };
+  PlannerOutput score(const PlannerInput& in, const std::vector<TPoint2D>& path, double to_goal,
+                      const Window& win, double target_heading, Mode mode) const {
+    PlannerOutput out;
+    const bool turn_only = mode != Mode::Drive;
+    const bool at_goal = mode == Mode::AtGoal;
+    std::vector<Twist> samples = candidates(in, win, to_goal, turn_only);
     if (turn_only) {
       // Slow down first when still moving: v from the window's low end.
       if (samples.empty())
@@ -107,8 +138,8 @@ class GoalDwa final : public LocalPlanner {
             continue;
           }
           ++out.admissible;
-          const double heading_err =
-              headingError(in, path, to_goal, target_heading, s, motion ? &*motion : nullptr, ts);
+          const double heading_err = headingError(in, path, to_goal, target_heading, s,
+                                                  motion ? &*motion : nullptr, ts, at_goal);
           const double path_dist = distanceToPath(path, e.x, e.y);
           const double speed = r_.v_max > 0 ? (r_.v_max - s.v) / r_.v_max : 0;
           tr.cost = g_.k_heading * heading_err + g_.k_path * path_dist + g_.k_speed * speed +
@@ -136,11 +167,9 @@ class GoalDwa final : public LocalPlanner {
     }
     if (!out.ok) out.mark(PlanStatus::NoAdmissible);
     if (out.wedged) out.note += out.note.empty() ? "wedged" : " (wedged)";
-    commit(out);
     return out;
   }
 
- private:
   /** 1 when `s` backs up after a command forward, or turns on the spot
    *  against the last turn on the spot; else 0. Driving forward again after
    *  backing up is never held back (the rear is seen least). */
@@ -163,25 +192,16 @@ class GoalDwa final : public LocalPlanner {
   }
   static int sign(double x) { return x > 1e-6 ? 1 : (x < -1e-6 ? -1 : 0); }
 
-  /** The heading critic of `s` (rad). Taken after `ts` (along `motion`
-   *  when given), unwrapped: the turn still needed (from the start heading,
-   *  within +-pi) less the turn made, which may exceed pi at a fast robot's
-   *  turn rate; wrapping it would make a spin past the target look as good
-   *  as stopping on it. When `s` reaches the goal within `ts`, it is the
-   *  angle by which the pose where it has covered the distance to the goal
-   *  misses it (seen from the start): scored beyond the goal, every fast
-   *  candidate would face back at it, and the robot crept to a stop short of it. */
   /** The window's samples that are worth scoring. Standing still is not a
    *  way to the goal: when nothing else is admissible the planner says so
-   *  and the supervisor stops. Arriving, no faster than stops at the goal
-   *  (within half the tolerance) at the robot's deceleration, where the
-   *  window allows. */
+   *  and the supervisor stops. Arriving, no faster than stops within a
+   *  quarter of the tolerance of the goal at the robot's deceleration, where
+   *  the window allows. */
   std::vector<Twist> candidates(const PlannerInput& in, const Window& win, double to_goal,
                                 bool turn_only) const {
     const double v_arrive =
-        in.goal
-            ? std::max(win.v_lo, std::sqrt(2 * r_.acc_v * std::max(0.0, to_goal - goal_tol_ / 2)))
-            : std::numeric_limits<double>::infinity();
+        in.goal ? std::max(win.v_lo, std::sqrt(2 * r_.acc_v * std::max(0.0, to_goal - aim() / 2)))
+                : std::numeric_limits<double>::infinity();
     // Backward only to slow down from backing up, unless `reverse`.
     const double v_lo = c_.reverse ? win.v_lo : std::min(0.0, win.v_hi);
     std::vector<Twist> out;
@@ -191,25 +211,34 @@ class GoalDwa final : public LocalPlanner {
         out.push_back(s);
     return out;
   }
-  /** True when `s` covers the distance to the goal (not yet within the
+  /** True when `s` covers the distance to the goal (not yet within half the
    *  tolerance) within `ts`. */
   bool arrives(const PlannerInput& in, double to_goal, const Twist& s, double ts) const {
-    return in.goal && to_goal >= goal_tol_ && std::abs(s.v) * ts > to_goal;
+    return in.goal && to_goal >= aim() && std::abs(s.v) * ts > to_goal;
   }
+  /** The heading critic of `s` (rad). Taken after `ts` (along `motion`
+   *  when given), unwrapped: the turn still needed (from the start heading,
+   *  within +-pi) less the turn made, which may exceed pi at a fast robot's
+   *  turn rate; wrapping it would make a spin past the target look as good
+   *  as stopping on it. When `s` reaches the goal within `ts`, it is the
+   *  angle by which the pose where it has covered the distance to the goal
+   *  misses it (seen from the start): scored beyond the goal, every fast
+   *  candidate would face back at it, and the robot crept to a stop short of it.
+   *  `at_goal`: the heading needed is the goal's. */
   double headingError(const PlannerInput& in, const std::vector<TPoint2D>& path, double to_goal,
-                      double target_heading, const Twist& s, const CommandMotion* motion,
-                      double ts) const {
+                      double target_heading, const Twist& s, const CommandMotion* motion, double ts,
+                      bool at_goal) const {
     auto poseAt = [&](double t) {
       return motion ? motion->pose(t) : integrateArc(in.pose, s.v, s.w, t);
     };
-    if (arrives(in, to_goal, s, ts)) {
+    if (!at_goal && arrives(in, to_goal, s, ts)) {
       const TPose2D a = poseAt(to_goal / std::abs(s.v));
       return std::atan2(std::hypot(in.goal->x - a.x, in.goal->y - a.y), to_goal);
     }
     const TPose2D e = poseAt(ts);
     const double turned = motion ? motion->turned(ts) : s.w * ts;
     double needed;
-    if (in.goal && to_goal < goal_tol_)
+    if (at_goal)
       needed = angleDiff(target_heading, in.pose.phi);
     else {
       const TPoint2D t = lookaheadPoint(path, e.x, e.y, g_.lookahead, corner_);
