@@ -3,7 +3,9 @@
 #include <carenav/navigation/global_planner.h>
 #include <carenav/navigation/local_map.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <queue>
 #include <sstream>
 
@@ -327,12 +329,16 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
 std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map,
                                       const std::vector<TPoint2D>& seen, const TPoint2D& from,
                                       const TPoint2D& goal, const std::optional<Route>& route,
-                                      double robot_radius, double skip, const NavigationParams& p) {
+                                      double robot_radius, double skip, const NavigationParams& p,
+                                      const std::vector<TPoint2D>& keep_out) {
   mrpt::maps::COccupancyGridMap2D marked = map;
-  for (const auto& q : seen)
+  auto mark = [&](const TPoint2D& q) {
     if (q.x > marked.getXMin() && q.x < marked.getXMax() && q.y > marked.getYMin() &&
         q.y < marked.getYMax())
       marked.setPos(q.x, q.y, 0.0f);
+  };
+  for (const auto& q : seen) mark(q);
+  for (const auto& q : keep_out) mark(q);
   const GlobalPlanner gp(marked, robot_radius, p);
   std::vector<TPoint2D> ahead{from};
   if (route) ahead.insert(ahead.end(), route->waypoints.begin(), route->waypoints.end());
@@ -347,14 +353,53 @@ bool RouteReplanner::due(size_t k, bool people) const {
   return k > 0 && k % every == 0;
 }
 
+bool RouteReplanner::recovered(const TPoint2D& at) {
+  if (avoid_after_ <= 0) return false;
+  auto it = std::find_if(places_.begin(), places_.end(), [&](const Place& q) {
+    return std::hypot(q.at.x - at.x, q.at.y - at.y) <= 2 * avoid_radius_;
+  });
+  if (it == places_.end()) it = places_.insert(places_.end(), Place{at, 0});
+  if (++it->recoveries == avoid_after_) fresh_ = true;
+  return it->recoveries == avoid_after_;
+}
+
+void RouteReplanner::newGoal() {
+  places_.clear();
+  fresh_ = false;
+}
+
+std::vector<TPoint2D> RouteReplanner::avoided() const {
+  std::vector<TPoint2D> out;
+  for (const auto& q : places_)
+    if (avoid_after_ > 0 && q.recoveries >= avoid_after_) out.push_back(q.at);
+  return out;
+}
+
+std::vector<TPoint2D> RouteReplanner::keepOut(const TPoint2D& from, const TPoint2D& goal,
+                                              double resolution) const {
+  std::vector<TPoint2D> out;
+  const double r = avoid_radius_, step = std::max(resolution / 2, 0.01);
+  for (const auto& c : avoided()) {
+    if (std::hypot(from.x - c.x, from.y - c.y) <= r + resolution ||
+        std::hypot(goal.x - c.x, goal.y - c.y) <= r + resolution)
+      continue;
+    for (double dy = -r; dy <= r + 1e-9; dy += step)
+      for (double dx = -r; dx <= r + 1e-9; dx += step)
+        if (std::hypot(dx, dy) <= r) out.push_back({c.x + dx, c.y + dy});
+  }
+  return out;
+}
+
 std::optional<Route> RouteReplanner::step(bool people, const mrpt::maps::COccupancyGridMap2D& map,
                                           const std::vector<TPoint2D>& seen, const TPoint2D& from,
                                           const TPoint2D& goal, const std::optional<Route>& route,
                                           double robot_radius, double skip,
                                           const NavigationParams& p) {
-  const bool fresh = detour_ && !people;  // the person is gone: plan anew
-  auto r =
-      replanAroundSeen(map, seen, from, goal, fresh ? std::nullopt : route, robot_radius, skip, p);
+  // the person is gone, or a place has just become one to avoid: plan anew
+  const bool fresh = (detour_ && !people) || fresh_;
+  fresh_ = false;
+  auto r = replanAroundSeen(map, seen, from, goal, fresh ? std::nullopt : route, robot_radius, skip,
+                            p, keepOut(from, goal, map.getResolution()));
   if (r) detour_ = people;
   return r;
 }

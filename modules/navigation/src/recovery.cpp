@@ -64,6 +64,12 @@ const ParamTable<RecoveryParams>& RecoveryParams::table() {
                    "recoveries without progress before giving up")
           .real("path_memory", &P::path_memory, "m", 0.1, 50,
                 "length of the robot's recent path kept for backing out")
+          .integer("avoid_after", &P::avoid_after, "", 0, 1000,
+                   "recoveries begun at one place (within 2 x avoid_radius) before the route "
+                   "is planned around it until the next goal; 0: never")
+          .real("avoid_radius", &P::avoid_radius, "m", 0.01, 5,
+                "radius of the disk around such a place that the route keeps clear of (the "
+                "robot's own radius and the route's clearance on top)")
           .real("odom_error_d", &P::odom_error_d, "m/m", 0, 1,
                 "odometry error bound per metre travelled: a recorded pose is known free "
                 "while the error since, at the footprint's corners, is at most backup_margin")
@@ -273,7 +279,7 @@ void Recovery::start(double now, const PlannerInput& in, const std::string& why)
   ++attempts_;
   reason_ = why;
   phase_t0_ = now;
-  last_pose_ = in.pose;
+  last_pose_ = start_pose_ = in.pose;
   backed_ = spun_ = spin_dir_ = 0;
   facing_ = false;
   blocked_since_.reset();

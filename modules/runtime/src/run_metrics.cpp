@@ -63,6 +63,7 @@ RunMetrics RunMetrics::fromJson(const Json& j) {
   read(j, "final_goal_error_m", m.final_goal_error_m, nan);
   read(j, "recoveries", m.recoveries);
   read(j, "recovery_cycles", m.recovery_cycles);
+  read(j, "avoided_places", m.avoided_places);
   read(j, "legs_completed", m.legs_completed);
   read(j, "legs_failed", m.legs_failed);
   read(j, "legs_missed", m.legs_missed);
@@ -124,6 +125,7 @@ std::string RunMetrics::toJson() const {
   j.key("legs_missed").value(static_cast<uint64_t>(legs_missed));
   j.key("leg_miss_max_m").value(leg_miss_max_m);
   j.key("recovery_cycles").value(static_cast<uint64_t>(recovery_cycles));
+  j.key("avoided_places").value(static_cast<uint64_t>(avoided_places));
   j.key("left_map").value(left_map);
   j.key("cycles").value(static_cast<uint64_t>(cycles));
   j.key("stops").value(static_cast<uint64_t>(stops));

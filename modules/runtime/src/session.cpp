@@ -56,7 +56,9 @@ NavigationSession::NavigationSession(SessionSetup setup)
       replanner_(s_.control_rate) {
   const auto locp = s_.profile.section<localization::LocalizationParams>("localization");
   const auto percp = s_.profile.section<perception::PerceptionParams>("perception");
-  nav_.setRecoveryParams(s_.profile.section<RecoveryParams>("nav.recovery"));
+  const auto recp = s_.profile.section<RecoveryParams>("nav.recovery");
+  nav_.setRecoveryParams(recp);
+  replanner_ = RouteReplanner(s_.control_rate, recp.avoid_after, recp.avoid_radius);
   walker_ = nav_.planner().needsUserIntent();
   for (const auto& sp : s_.sensors)
     if (sp.type == "lidar2d" && loc_sensor_.empty()) loc_sensor_ = sp.label;
@@ -91,6 +93,7 @@ bool NavigationSession::setGoals(std::vector<SessionGoal> goals, bool patrol, do
   leg_timeout_ = leg_timeout;
   goal_ = goals_.front().pose;
   m_.goal_name = goals_.front().label;
+  replanner_.newGoal();
   if (!s_.map) return false;
   gp_ = std::make_unique<GlobalPlanner>(*s_.map, fp_.inscribed, s_.nav);
   route_origin_ = from;
@@ -146,6 +149,7 @@ void NavigationSession::nextLeg(bool reported, const TPoint2D& where, double now
   leg_ = (leg_ + 1) % goals_.size();
   goal_ = goals_[leg_].pose;
   leg_t0_ = now;
+  replanner_.newGoal();
   const TPose2D mp = nav_.mapPose();
   if (gp_) planRoute({mp.x, mp.y});  // none: the replanner keeps trying; the leg times out
 }
@@ -179,7 +183,7 @@ NavigationSession::Step NavigationSession::cycle(double t, const std::optional<T
     return st;
   }
   const double replan0 = threadCpuMs();
-  replan(k, st.cycle.replan);
+  replan(k, st.cycle.replan, st.cycle.stuck_at);
   work_ms_ += threadCpuMs() - replan0;
   sampleHealth(k);
   return st;
@@ -211,10 +215,13 @@ std::optional<SessionEnd> NavigationSession::goalCheck(double t, const Navigator
 
 // Replan from the localised pose with the obstacles the robot has seen
 // marked on the map (boxes and people the map does not show; when that
-// finds no route, the last one stays). A walker's scripted user walks the
+// finds no route, the last one stays), and around the places where
+// recoveries keep beginning. A walker's scripted user walks the
 // new route too: a user sees boxes and people.
-void NavigationSession::replan(size_t k, bool recovery_ended) {
+void NavigationSession::replan(size_t k, bool recovery_ended,
+                               const std::optional<TPoint2D>& stuck_at) {
   if (!goal_ || !gp_) return;
+  if (stuck_at && replanner_.recovered(*stuck_at)) ++m_.avoided_places;
   const bool people = !nav_.predicted().empty();
   if (!recovery_ended && !replanner_.due(k, people)) return;
   const TPose2D mp = nav_.mapPose();

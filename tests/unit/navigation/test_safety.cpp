@@ -264,5 +264,73 @@ TEST(GlobalPlanner, PassagesCloserThanTheirApproachNeverSendTheRobotBack) {
   }
 }
 
+/** twoRooms() with a second 1 m door in the dividing wall, centred at y = 4.5. */
+mrpt::maps::COccupancyGridMap2D twoDoorsInAWall() {
+  auto g = twoRooms(1.0, false);
+  for (double x = 4.95; x <= 5.05; x += 0.025)
+    for (double y = 4.0; y <= 5.0; y += 0.025) g.setPos(x, y, 0.95f);
+  return g;
+}
+
+/** The least distance from `p` to the route's cells. */
+double routeDistance(const Route& r, const TPoint2D& p) {
+  double d = 1e9;
+  for (const auto& c : r.cells) d = std::min(d, std::hypot(c.x - p.x, c.y - p.y));
+  return d;
+}
+
+TEST(RouteReplanner, PlansAroundAPlaceWhereRecoveriesKeepBeginning) {
+  // The robot keeps getting stuck at the lower door (the clutter
+  // benchmark's timeouts: 4-16 recoveries at one gap's mouth, the route
+  // replanned through it each time, as nothing the robot saw blocked it).
+  // After avoid_after recoveries there, the route goes through the other door.
+  NavigationParams p;
+  const auto g = twoDoorsInAWall();
+  const GlobalPlanner gp(g, 0.25, p);
+  const TPoint2D from{2, 1.5}, goal{8, 1.5}, door{5, 1.5};
+  const auto first = gp.plan(from, goal);
+  ASSERT_TRUE(first.has_value());
+  ASSERT_LT(routeDistance(*first, door), 0.1);
+  RouteReplanner rp(10, 2, 0.2);
+  EXPECT_FALSE(rp.recovered({4.8, 1.45}));
+  // One recovery: the route is still clear, it stays.
+  EXPECT_FALSE(rp.step(false, g, {}, from, goal, first, 0.25, 0.5, p).has_value());
+  EXPECT_TRUE(rp.recovered({4.9, 1.6}));  // within 2 x 0.2 m of the first: the same place
+  ASSERT_EQ(rp.avoided().size(), 1u);
+  const auto second = rp.step(false, g, {}, from, goal, first, 0.25, 0.5, p);
+  ASSERT_TRUE(second.has_value());
+  EXPECT_GT(routeDistance(*second, rp.avoided()[0]), 0.2 + 0.25);
+  bool upper = false;
+  for (const auto& c : second->cells) upper = upper || (std::abs(c.x - 5) < 0.1 && c.y > 3.9);
+  EXPECT_TRUE(upper);
+  // Later replans keep clear of it too (the upper route is clear: kept).
+  EXPECT_FALSE(rp.step(false, g, {}, from, goal, second, 0.25, 0.5, p).has_value());
+  // A new goal forgets it.
+  rp.newGoal();
+  EXPECT_TRUE(rp.avoided().empty());
+}
+
+TEST(RouteReplanner, KeepsTheRouteWhenNoneAvoidsThePlaceOrAvoidingIsOff) {
+  NavigationParams p;
+  const auto g = twoRooms(1.0, false);  // one door only
+  const GlobalPlanner gp(g, 0.25, p);
+  const TPoint2D from{2, 1.5}, goal{8, 1.5};
+  const auto route = gp.plan(from, goal);
+  ASSERT_TRUE(route.has_value());
+  RouteReplanner rp(10, 2, 0.2);
+  rp.recovered({5, 1.5});
+  rp.recovered({5, 1.5});
+  EXPECT_FALSE(rp.step(false, g, {}, from, goal, route, 0.25, 0.5, p).has_value());
+  // A place at the robot itself (it could not leave it) or at the goal is not avoided.
+  RouteReplanner at_start(10, 1, 0.2);
+  at_start.recovered(from);
+  const auto same = at_start.step(false, g, {}, from, goal, route, 0.25, 0.5, p);
+  ASSERT_TRUE(same.has_value());  // planned anew, through the same door
+  EXPECT_NEAR(same->length, route->length, 1e-6);
+  RouteReplanner off(10, 0, 0.2);
+  for (int i = 0; i < 5; ++i) EXPECT_FALSE(off.recovered({5, 1.5}));
+  EXPECT_TRUE(off.avoided().empty());
+}
+
 }  // namespace
 }  // namespace carenav::navigation

@@ -56,36 +56,63 @@ class GlobalPlanner {
   std::vector<float> dist_;  // m to the nearest non-free cell
 };
 
-/** Replanning with what the robot has seen: marks `seen` obstacles (map
- *  frame) on a copy of `map` and, when the route ahead of `from` is no
- *  longer clear of them (beyond `skip` metres), plans a new one from `from`
- *  to `goal`. nullopt: keep the current route (still clear, or no new one
- *  found: a route that flips between two equal detours makes the robot
- *  dither). */
+/** Replanning with what the robot has seen: marks `seen` obstacles and the
+ *  `keep_out` points (map frame) on a copy of `map` and, when the route
+ *  ahead of `from` is no longer clear of them (beyond `skip` metres), plans
+ *  a new one from `from` to `goal`.
+ *  nullopt: keep the current route (still clear, or no new one found: a
+ *  route that flips between two equal detours makes the robot dither). */
 std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map,
                                       const std::vector<TPoint2D>& seen, const TPoint2D& from,
                                       const TPoint2D& goal, const std::optional<Route>& route,
-                                      double robot_radius, double skip, const NavigationParams& p);
+                                      double robot_radius, double skip, const NavigationParams& p,
+                                      const std::vector<TPoint2D>& keep_out = {});
 
 /** When to replan (the simulator runs and the bridge share it): every 2 s
  *  when the route ahead is blocked by what the robot has seen; every 0.5 s
  *  while a tracked person's lane is on the local map (it may cross the
  *  route); and, after a detour around a person, once the person is gone, a
- *  fresh route (the detour is undone). */
+ *  fresh route (the detour is undone). Places where recoveries keep
+ *  beginning (a gap the robot reaches and cannot get through, a corner it
+ *  cannot turn at) are avoided: once `avoid_after` recoveries began within
+ *  2 x `avoid_radius` of one, a fresh route keeps clear of a disk of
+ *  `avoid_radius` there until the next goal (RecoveryParams; 0: never). */
 class RouteReplanner {
  public:
-  explicit RouteReplanner(double control_rate) : rate_(control_rate) {}
+  explicit RouteReplanner(double control_rate, int avoid_after = 0, double avoid_radius = 0.2)
+      : rate_(control_rate), avoid_after_(avoid_after), avoid_radius_(avoid_radius) {}
   /** Whether cycle k replans; `people`: tracked lanes exist now. */
   bool due(size_t k, bool people) const;
-  /** Replans (call when due): a new route, or nullopt to keep the current one. */
+  /** A recovery that began at `at` (map frame) has ended. True when its
+   *  place has just become one to avoid. */
+  bool recovered(const TPoint2D& at);
+  /** A new goal: the places to avoid are forgotten. */
+  void newGoal();
+  /** The places the route keeps clear of (map frame). */
+  std::vector<TPoint2D> avoided() const;
+  /** Replans (call when due, and when a recovery ended): a new route, or
+   *  nullopt to keep the current one (also when no route keeps clear of
+   *  the places to avoid). */
   std::optional<Route> step(bool people, const mrpt::maps::COccupancyGridMap2D& map,
                             const std::vector<TPoint2D>& seen, const TPoint2D& from,
                             const TPoint2D& goal, const std::optional<Route>& route,
                             double robot_radius, double skip, const NavigationParams& p);
 
  private:
+  /** Points filling the disks of the places to avoid (but one that holds
+   *  `from` or `goal`: the route could neither leave nor reach it). */
+  std::vector<TPoint2D> keepOut(const TPoint2D& from, const TPoint2D& goal,
+                                double resolution) const;
+  struct Place {
+    TPoint2D at;
+    int recoveries = 0;
+  };
   double rate_;
+  int avoid_after_;
+  double avoid_radius_;
   bool detour_ = false;
+  bool fresh_ = false;  ///< a place has just become one to avoid: plan anew
+  std::vector<Place> places_;
 };
 
 }  // namespace carenav::navigation

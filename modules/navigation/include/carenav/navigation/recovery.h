@@ -34,6 +34,11 @@ struct RecoveryParams {
   double wait_time = 1.0;       ///< s, waiting when neither backing out nor turning is free
   int max_attempts = 6;         ///< recoveries without progress before giving up
   double path_memory = 3.0;     ///< m, of the robot's own recent path kept
+  /** Recoveries that began within 2 x avoid_radius of the first at one
+   *  place: once avoid_after of them have, the route is planned around a
+   *  disk of avoid_radius there (RouteReplanner); 0: never. */
+  int avoid_after = 2;
+  double avoid_radius = 0.2;  ///< m
   /** The odometry's error bound, per metre travelled (m/m), per radian
    *  turned (rad/rad) and per metre travelled in heading (rad/m): a
    *  recorded pose is known free only while the error since it was
@@ -83,6 +88,8 @@ class Recovery {
   size_t recoveries() const { return recoveries_; }
   bool gaveUp() const { return phase_ == Phase::GaveUp; }
   const std::string& reason() const { return reason_; }
+  /** Where the last recovery began (odometry frame). */
+  const TPose2D& startedAt() const { return start_pose_; }
   /** True once after each recovery: the route should be planned again. */
   bool takeReplanRequest() {
     const bool r = replan_;
@@ -138,6 +145,7 @@ class Recovery {
   double backed_ = 0, spun_ = 0, spin_dir_ = 0;
   bool facing_ = false;  // the spin turns to face the route after a back-out
   TPose2D last_pose_;
+  TPose2D start_pose_;  // where it began
   // the robot's dynamics of the cycle under way (PlannerInput::motion): the
   // supervisor judges a recovery's command from it, so the recovery does too
   std::optional<MotionState> motion_;

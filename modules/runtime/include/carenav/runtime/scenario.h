@@ -111,6 +111,7 @@ struct RunMetrics {
   bool left_map = false;       ///< the true centre went off the world's map (or onto unknown)
   size_t recoveries = 0;       ///< recovery behaviours started (goal robots)
   size_t recovery_cycles = 0;  ///< control cycles spent in them
+  size_t avoided_places = 0;   ///< places where recoveries kept beginning, routed around
   size_t legs_completed = 0;   ///< patrol: goals reached (in truth)
   size_t legs_failed = 0;      ///< patrol: goals given up or timed out
   /** Patrol: goals the robot reported reached while its true centre was

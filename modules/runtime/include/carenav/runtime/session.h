@@ -154,7 +154,8 @@ class NavigationSession {
   std::vector<io::Overlay> overlays(std::vector<io::Overlay> extra) const;
   void nextLeg(bool reported, const TPoint2D& where, double now);
   void planRoute(const TPoint2D& from);
-  void replan(size_t k, bool recovery_ended);
+  /** Replans when due, or at once when a recovery ended (begun at `stuck_at`). */
+  void replan(size_t k, bool recovery_ended, const std::optional<TPoint2D>& stuck_at);
   void depthFrame(const mrpt::obs::CObservation& obs, const TPose2D& odo, double t);
   void scan2d(const mrpt::obs::CObservation::Ptr& obs, const TPose2D& odo, double t);
   void record(double t, const Navigator::Cycle& c, const std::optional<Truth>& truth, double ms);
