@@ -476,6 +476,51 @@ TEST(PlannerSupervisor, FromTheMeasuredVelocityGoalDwaAndTheSupervisorNeverDisag
   }
 }
 
+/** One closed-loop cycle of 0.1 s: goal-dwa plans from `base`'s state
+ *  towards `goal` on the straight route from `start`, the supervisor judges
+ *  the plan and `base` moves as the simulator does (latency, accelerations).
+ *  The plan's status; `contact` when the footprint touched an obstacle. */
+PlanStatus closedLoopCycle(LocalPlanner& planner, const SafetySupervisor& sup,
+                           const LocalCostmap& map, Base& base, const TPoint2D& start,
+                           const TPoint2D& goal, bool& contact) {
+  PlannerInput in;
+  in.map = &map;
+  in.pose = base.pose;
+  in.current = base.vel;
+  MotionState m{base.vel, base.cmd, base.latency, 0.1};
+  if (!base.pending.empty()) m.commanded = base.pending.back().second;
+  in.motion = m;
+  in.path = {start, goal};
+  in.goal = TPose2D{goal.x, goal.y, 0};
+  SafetyInput s;
+  s.now = 10;
+  s.last_scan_time = 9.95;
+  s.last_odom_time = 9.99;
+  s.plan = planner.plan(in);
+  s.pose = base.pose;
+  s.map = &map;
+  s.motion = m;
+  base.send(sup.apply(s).cmd);
+  contact = !base.run(map, 0.1);
+  return s.plan.status;
+}
+
+/** Closed loop (closedLoopCycle) from where `base` stands to `goal`, at
+ *  most `cycles`: the status of the plan that ended it (GoalReached; the
+ *  robot stops there) or of the last one (NoAdmissible on a contact). */
+PlanStatus driveToGoal(LocalPlanner& planner, const SafetySupervisor& sup, const LocalCostmap& map,
+                       Base& base, const TPoint2D& goal, int cycles) {
+  const TPoint2D start{base.pose.x, base.pose.y};
+  PlanStatus status = PlanStatus::NoAdmissible;
+  for (int k = 0; k < cycles; ++k) {
+    bool contact = false;
+    status = closedLoopCycle(planner, sup, map, base, start, goal, contact);
+    if (contact) return PlanStatus::NoAdmissible;
+    if (status == PlanStatus::GoalReached) return status;
+  }
+  return status;
+}
+
 TEST(GoalDwa, FromTheMeasuredVelocityNeverTouchesAPostAt2MetresPerSecond) {
   // Closed loop at 2 m/s and 4 rad/s through random post fields: goal-dwa
   // and the supervisor from the robot's state, the robot moved as the
@@ -493,61 +538,12 @@ TEST(GoalDwa, FromTheMeasuredVelocityNeverTouchesAPostAt2MetresPerSecond) {
     ++runs;
     Base base{r};
     for (int k = 0; k < 40; ++k) {
-      PlannerInput in;
-      in.map = &map;
-      in.pose = base.pose;
-      in.current = base.vel;
-      MotionState m{base.vel, base.cmd, base.latency, 0.1};
-      if (!base.pending.empty()) m.commanded = base.pending.back().second;
-      in.motion = m;
-      in.path = {{0, 0}, {3.8, 0}};
-      in.goal = TPose2D{3.8, 0, 0};
-      SafetyInput s;
-      s.now = 10;
-      s.last_scan_time = 9.95;
-      s.last_odom_time = 9.99;
-      s.plan = planner->plan(in);
-      s.pose = base.pose;
-      s.map = &map;
-      s.motion = m;
-      base.send(sup.apply(s).cmd);
-      ASSERT_TRUE(base.run(map, 0.1)) << "trial " << trial << " cycle " << k;
+      bool contact = false;
+      closedLoopCycle(*planner, sup, map, base, {0, 0}, {3.8, 0}, contact);
+      ASSERT_FALSE(contact) << "trial " << trial << " cycle " << k;
     }
   }
   EXPECT_GT(runs, 8);
-}
-
-/** Closed loop of goal-dwa and the supervisor driving `base` to `goal` (on
- *  a straight route from the start) on `map`, at most `cycles` of 0.1 s:
- *  the status of the plan that ended it (GoalReached) or of the last one. */
-PlanStatus driveToGoal(LocalPlanner& planner, const SafetySupervisor& sup, const LocalCostmap& map,
-                       Base& base, const TPoint2D& goal, int cycles) {
-  const TPoint2D start{base.pose.x, base.pose.y};
-  PlanStatus status = PlanStatus::NoAdmissible;
-  for (int k = 0; k < cycles; ++k) {
-    PlannerInput in;
-    in.map = &map;
-    in.pose = base.pose;
-    in.current = base.vel;
-    MotionState m{base.vel, base.cmd, base.latency, 0.1};
-    if (!base.pending.empty()) m.commanded = base.pending.back().second;
-    in.motion = m;
-    in.path = {start, goal};
-    in.goal = TPose2D{goal.x, goal.y, 0};
-    SafetyInput s;
-    s.now = 10;
-    s.last_scan_time = 9.95;
-    s.last_odom_time = 9.99;
-    s.plan = planner.plan(in);
-    s.pose = base.pose;
-    s.map = &map;
-    s.motion = m;
-    status = s.plan.status;
-    if (status == PlanStatus::GoalReached) return status;
-    base.send(sup.apply(s).cmd);
-    if (!base.run(map, 0.1)) return PlanStatus::NoAdmissible;
-  }
-  return status;
 }
 
 TEST(GoalDwa, SaysItArrivedOnlyWhenStoppedWellInsideTheTolerance) {
@@ -616,30 +612,8 @@ TEST(GoalDwa, ArrivesAtTheGoalAt2MetresPerSecondAndStopsWithinTheTolerance) {
   map.build({0, 0}, {});
   const TPoint2D goal{0.65 * std::cos(0.1), 0.65 * std::sin(0.1)};
   Base base{r};
-  bool reached = false;
-  for (int k = 0; k < 100 && !reached; ++k) {
-    PlannerInput in;
-    in.map = &map;
-    in.pose = base.pose;
-    in.current = base.vel;
-    MotionState m{base.vel, base.cmd, base.latency, 0.1};
-    if (!base.pending.empty()) m.commanded = base.pending.back().second;
-    in.motion = m;
-    in.path = {{0, 0}, goal};
-    in.goal = TPose2D{goal.x, goal.y, 0};
-    SafetyInput s;
-    s.now = 10;
-    s.last_scan_time = 9.95;
-    s.last_odom_time = 9.99;
-    s.plan = planner->plan(in);
-    s.pose = base.pose;
-    s.map = &map;
-    s.motion = m;
-    reached = s.plan.status == PlanStatus::GoalReached;
-    base.send(sup.apply(s).cmd);
-    ASSERT_TRUE(base.run(map, 0.1));
-  }
-  ASSERT_TRUE(reached) << "at x = " << base.pose.x;
+  ASSERT_EQ(driveToGoal(*planner, sup, map, base, goal, 100), PlanStatus::GoalReached)
+      << "at x = " << base.pose.x;
   base.send({0, 0});
   base.run(map, 2.0);  // braking to a stop
   EXPECT_LT(std::hypot(base.pose.x - goal.x, base.pose.y - goal.y), nav.goal_tolerance);
