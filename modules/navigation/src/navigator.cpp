@@ -340,9 +340,7 @@ Navigator::Cycle Navigator::cycle(double now) {
         c.gave_up = recovery_.gaveUp();
       }
       c.replan = recovery_.takeReplanRequest();
-      // a place to avoid only where nothing moved (a person in the way
-      // leaves; the place stays passable)
-      if (c.replan && moving_.empty() && predicted_.empty()) {
+      if (c.replan) {
         const TPose2D& a = recovery_.startedAt();
         const auto q = (CPose2D() - CPose2D(map_to_odom_)) + mrpt::poses::CPoint2D(a.x, a.y);
         c.stuck_at = TPoint2D{q.x(), q.y()};

@@ -82,8 +82,7 @@ class Navigator {
     std::string recovery;       ///< the recovery under way ("back out", "turn", "wait"), or ""
     bool gave_up = false;       ///< the recoveries did not help: the robot stops for good
     bool replan = false;        ///< a recovery ended: plan the route again now
-    /** Map frame: where the recovery that ended began, when no moving
-     *  obstacle is about (the place itself held the robot). */
+    /** Map frame: where the recovery that ended began. */
     std::optional<TPoint2D> stuck_at;
   };
   Cycle cycle(double now);
