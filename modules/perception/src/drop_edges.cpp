@@ -90,8 +90,9 @@ struct ColumnScan {
     const double ca = std::cos(rb.phi()), sa = std::sin(rb.phi());
     for (double d = 0; d <= kEdgeLength + 1e-9; d += 0.5 * grid.resolution()) {
       const double x = f.x + hx / len * d, y = f.y + hy / len * d;
-      grid.addEvidence(grid.cellX(rb.x() + ca * x - sa * y), grid.cellY(rb.y() + sa * x + ca * y),
-                       static_cast<float>(p.k_m));
+      const int i = grid.cellX(rb.x() + ca * x - sa * y), j = grid.cellY(rb.y() + sa * x + ca * y);
+      grid.addEvidence(i, j, static_cast<float>(p.k_m));
+      grid.setDrop(i, j, true);
     }
     ++edges;
   }

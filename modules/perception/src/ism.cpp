@@ -412,7 +412,27 @@ struct IsmFrame {
   double ca, sa, rx, ry;  // robot pose in the odometry frame
   float kg;
   const std::vector<SlopeVerdict>& verdict;  // per voxel, from classifyVoxels()
+  const std::vector<uint8_t>& below;         // per voxel, lowerSurface()
 };
+
+/** Per voxel, whether it is an obstacle lying below the plane by more than
+ *  d_pth: a lower surface (the treads beyond a stair edge, the bottom of a
+ *  hole). A ray to a farther return passes above it, not through it. */
+const std::vector<uint8_t>& lowerSurface(const ElevationGrid& g, const Plane& plane,
+                                         const PerceptionParams& p,
+                                         const std::vector<VoxelClass>& classes) {
+  const int m = g.cells();
+  thread_local std::vector<uint8_t> below;
+  below.assign(classes.size(), 0);
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      const size_t k = static_cast<size_t>(i) * m + j;
+      if (classes[k] != VoxelClass::Obstacle) continue;
+      const auto z = plane.zAt(g.centre(i), g.centre(j));
+      below[k] = z && *z - g.at(i, j).mean > p.d_pth;
+    }
+  return below;
+}
 
 /** Whether the voxel at (x, y) (robot frame) is ground whose own slope was
  *  judged traversable (rule 4's window or a gentle region of rule 6). A
@@ -424,6 +444,23 @@ bool gentleVerdict(const IsmFrame& f, double x, double y) {
   const int ei = f.g.cellOf(x), ej = f.g.cellOf(y);
   return f.g.inside(ei, ej) &&
          f.verdict[static_cast<size_t>(ei) * f.g.cells() + ej] == SlopeVerdict::Gentle;
+}
+
+/** Whether a ray passing over grid cell (ci, cj), at (x, y) in the robot
+ *  frame, gives it no free evidence (nor does a ray to a lower surface: it
+ *  passed above whatever lies before it): a lower surface seen there (a drop
+ *  is no floor: the ray passed above it); a cell without points in this frame
+ *  beyond the near edge of the view (a shadow); or, nearer than that edge
+ *  (the blind zone under the camera), a cell that holds a drop remembered
+ *  from earlier frames (the blind zone's free evidence would erase the
+ *  stair edge the robot stopped for as it enters the blind zone). */
+bool noFreeEvidence(const IsmFrame& f, int ci, int cj, double x, double y, bool beyond_edge) {
+  const int ei = f.g.cellOf(x), ej = f.g.cellOf(y);
+  if (!f.g.inside(ei, ej)) return false;
+  const size_t q = static_cast<size_t>(ei) * f.g.cells() + ej;
+  if (f.below[q]) return true;
+  if (f.classes[q] != VoxelClass::None) return false;
+  return beyond_edge || f.grid.drop(ci, cj);
 }
 
 /** The rays of voxel k into the grid: [Garrote17, Eq. 5] from the voxel back
@@ -454,21 +491,20 @@ void integrateVoxel(const IsmFrame& f, int32_t k) {
   // |c| in [0, |c_v|], [Garrote17, Eq. 5], from the voxel back to the robot.
   int sat = 0;
   const double near_edge = f.edge[f.polar.bin[k]] + g.resolution();
+  if (f.below[k]) grid.setDrop(vi, vj, true);
+  if (vc == VoxelClass::Ground) grid.setDrop(vi, vj, false);  // the floor seen in the cell
   grid.walkSegment(wx, wy, cv, 0.0, [&](int ci, int cj, double dc) {
     const bool at_voxel = ci == vi && cj == vj;
     const double D = at_voxel ? 0.0 : std::min(0.0, dc - cv);
-    if (!at_voxel && dc > near_edge && cv > 1e-9) {
-      const int ei = g.cellOf(x * dc / cv), ej = g.cellOf(y * dc / cv);
-      if (g.inside(ei, ej) && f.classes[static_cast<size_t>(ei) * m + ej] == VoxelClass::None &&
-          (obstacle ? amp * IsmTables::at(gauss, D) : kg + (0.5f - kg) * IsmTables::at(sigm, D)) <
-              0.5f)
-        return true;  // a shadow cell: no free evidence
-    }
     // (The thesis, [Rosa17, Ch. 3], writes the ground branch with the Gaussian
     // exp(-D^2 / 2 sigma^2) inside the sigmoid; carenav uses the paper's form: docs/design.md,
     // 'Inverse sensor model'.)
     const float pr =
         obstacle ? amp * IsmTables::at(gauss, D) : kg + (0.5f - kg) * IsmTables::at(sigm, D);
+    if (!at_voxel && pr < 0.5f &&
+        (f.below[k] ||
+         (cv > 1e-9 && noFreeEvidence(f, ci, cj, x * dc / cv, y * dc / cv, dc > near_edge))))
+      return true;
     if (pr > 0.5f && steep_window && !at_voxel && gentleVerdict(f, x * dc / cv, y * dc / cv))
       return true;
     if (pr < 0.5f && grid.frameFree(ci, cj) <= pr) {
@@ -520,7 +556,8 @@ IsmStats integrateIsm(const ElevationGrid& g, const Plane& plane, const Percepti
                        grid.robot().x(),
                        grid.robot().y(),
                        static_cast<float>(p.k_g),
-                       verdicts};
+                       verdicts,
+                       lowerSurface(g, plane, p, classes)};
   // Voxels from the farthest to the nearest.
   for (const int32_t k : farthestFirst(g))
     if (classes[k] != VoxelClass::None) integrateVoxel(frame, k);

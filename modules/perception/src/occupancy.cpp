@@ -21,6 +21,7 @@ void LocalOccupancy::reset() {
   logodds_.assign(n, 0.f);
   occ_.assign(n, 0.5f);
   free_.assign(n, 0.5f);
+  drop_.assign(n, 0);
   robot_ = mrpt::poses::CPose2D();
   org_i_ = org_j_ = -m_ / 2;
 }
@@ -31,13 +32,17 @@ void LocalOccupancy::moveTo(const mrpt::poses::CPose2D& robot) {
   const long nj = static_cast<long>(std::floor(robot.y() / r_)) - m_ / 2;
   if (ni == org_i_ && nj == org_j_) return;
   std::vector<float> moved(logodds_.size(), 0.f);
+  std::vector<uint8_t> moved_drop(drop_.size(), 0);
   for (int i = 0; i < m_; ++i)
     for (int j = 0; j < m_; ++j) {
       const long oi = ni + i - org_i_, oj = nj + j - org_j_;  // old grid index
       if (oi < 0 || oj < 0 || oi >= m_ || oj >= m_) continue;
-      moved[static_cast<size_t>(i) * m_ + j] = logodds_[static_cast<size_t>(oi) * m_ + oj];
+      const size_t k = static_cast<size_t>(i) * m_ + j, ok = static_cast<size_t>(oi) * m_ + oj;
+      moved[k] = logodds_[ok];
+      moved_drop[k] = drop_[ok];
     }
   logodds_.swap(moved);
+  drop_.swap(moved_drop);
   org_i_ = ni;
   org_j_ = nj;
 }

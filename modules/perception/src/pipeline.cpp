@@ -57,6 +57,31 @@ double msSince(Clock::time_point t0) {
 }
 }  // namespace
 
+/** The robot's own floor, once RRT-GPD finds it where the mounting puts it
+ *  (within prior_height_tolerance of z = 0 at the robot), confirms the
+ *  mounting. From then on a plane lying below that floor at the robot by
+ *  more than d_pth (the height that makes a voxel an obstacle) is a lower
+ *  floor seen beyond a drop whose edge is out of view (in the blind zone
+ *  under the camera, behind the robot's turn), not floor the robot can
+ *  drive onto: the frame is classified against z = 0, its voxels lie below
+ *  it and are obstacles. Before the mounting is confirmed such a plane is
+ *  kept and reported (the sensor pose may be off: check it). */
+void Pipeline::lowerFloor(FrameResult& r) {
+  const double off = r.ground.prior_offset;
+  if (std::abs(off) <= p_.prior_height_tolerance) floor_confirmed_ = true;
+  if (!floor_confirmed_ || off >= -p_.d_pth) return;
+  r.plane = Plane{};
+  r.plane_source = "nominal";
+  r.lower_floor = true;
+  char buf[200];
+  std::snprintf(buf, sizeof(buf),
+                "ground plane %.3f m below the robot's floor at the robot (more than d_pth "
+                "%.3f m) after that floor was seen at z = 0: a lower floor beyond a drop; "
+                "classified against z = 0",
+                -off, p_.d_pth);
+  r.plane_note = buf;
+}
+
 FrameResult Pipeline::process(const FrameInput& in, bool virtual_scans) {
   FrameResult r;
   const auto t_all = Clock::now();
@@ -86,6 +111,7 @@ FrameResult Pipeline::process(const FrameInput& in, bool virtual_scans) {
                         r.ground.prior_offset, p_.prior_height_tolerance);
           r.plane_note = buf;
         }
+        if (method_ == Method::RrtGpd) lowerFloor(r);
       } else {
         // Nothing plane-like seen, or only trees smaller than min_tree_nodes:
         // the floor the robot stands on (the mounting prior), never a small tree.
@@ -380,7 +406,9 @@ class PerceiveJob {
     const FrameResult r = pipe_.process(in, true);
     const size_t f = res_.frames++;
     if (r.points_valid == 0) ++frames_without_points_;
-    if (r.plane_source == "nominal" && r.ground.trees_refused > 0) ++frames_refused_;
+    if (r.plane_source == "nominal" && !r.lower_floor && r.ground.trees_refused > 0)
+      ++frames_refused_;
+    if (r.lower_floor) ++frames_lower_floor_;
     if (!r.plane_note.empty() && r.plane_source != "nominal") ++frames_far_plane_;
     char name[64];
     std::snprintf(name, sizeof(name), "frame_%04zu", f);
@@ -425,6 +453,11 @@ class PerceiveJob {
                               std::to_string(res_.frames) +
                               " frame(s): every RRT tree was smaller than min_tree_nodes; the "
                               "nominal floor z = 0 was used (see plane_note)");
+    if (frames_lower_floor_ > 0)
+      res_.warnings.push_back(input + ": " + std::to_string(frames_lower_floor_) + " of " +
+                              std::to_string(res_.frames) +
+                              " frame(s): the only ground plane in view lay more than d_pth below "
+                              "the robot's floor seen before (a drop): classified against z = 0");
     if (frames_far_plane_ > 0)
       res_.warnings.push_back(input + ": " + std::to_string(frames_far_plane_) + " of " +
                               std::to_string(res_.frames) +
@@ -441,7 +474,7 @@ class PerceiveJob {
   mrpt::serialization::CArchiveStreamBase<mrpt::io::CFileGZOutputStream> scans_arch_{scans_out_};
   double total_ms_ = 0;
   size_t frames_without_points_ = 0;  // no valid point inside the grid's z band
-  size_t frames_far_plane_ = 0, frames_refused_ = 0;
+  size_t frames_far_plane_ = 0, frames_refused_ = 0, frames_lower_floor_ = 0;
 };
 
 }  // namespace

@@ -68,6 +68,14 @@ class LocalOccupancy {
   void walkSegment(double x, double y, double s0, double s1, F&& f) const;
   /** This frame's strongest free evidence in cell (i, j) (0.5: none). */
   float frameFree(int i, int j) const { return free_[static_cast<size_t>(i) * m_ + j]; }
+  /** Cell (i, j) holds a drop: a surface seen below the floor, or a drop's
+   *  edge line. Kept (and scrolled) until the floor is seen in the cell
+   *  (setDrop(i, j, false)); the camera's blind zone gives such a cell no
+   *  free evidence (integrateIsm()). */
+  void setDrop(int i, int j, bool drop) {
+    if (inside(i, j)) drop_[static_cast<size_t>(i) * m_ + j] = drop;
+  }
+  bool drop(int i, int j) const { return inside(i, j) && drop_[static_cast<size_t>(i) * m_ + j]; }
 
  private:
   int m_;
@@ -75,6 +83,7 @@ class LocalOccupancy {
   long org_i_ = 0, org_j_ = 0;  // lattice index of cell (0, 0)
   mrpt::poses::CPose2D robot_;
   std::vector<float> logodds_, occ_, free_;
+  std::vector<uint8_t> drop_;
 };
 
 /** Height-band baseline ([Rosa17, Sec. 5.3], ROS pointcloud_to_laserscan +

@@ -32,9 +32,12 @@ struct FrameResult {
   size_t points_total = 0, points_valid = 0;
   std::optional<Plane> plane;  ///< robot frame, normal up
   std::string plane_source;    ///< rrt-gpd | ransac | nominal (z = 0) | none
-  /** Why the plane is nominal (no seed / every tree refused), or that it lies farther from
-   *  the robot's floor than prior_height_tolerance; empty otherwise. */
+  /** Why the plane is nominal (no seed / every tree refused / a lower floor), or that it
+   *  lies farther from the robot's floor than prior_height_tolerance; empty otherwise. */
   std::string plane_note;
+  /** RRT-GPD's plane lay more than d_pth below the robot's floor after that
+   *  floor was seen at z = 0 (Pipeline::lowerFloor()): classified against z = 0. */
+  bool lower_floor = false;
   GroundPlaneResult ground;
   /** depth_noise_std of this frame over the profile's: the measured noise
    *  (measuredNoiseRatio) clamped to [1, noise_adapt_max]. */
@@ -71,8 +74,11 @@ class Pipeline {
   mrpt::img::CImage render(const FrameResult& r) const;
 
  private:
+  void lowerFloor(FrameResult& r);
+
   PerceptionParams p_;
   Method method_;
+  bool floor_confirmed_ = false;  ///< RRT-GPD found the robot's floor at z = 0 (lowerFloor())
   ElevationGrid elev_;
   LocalOccupancy grid_;
 };
