@@ -25,22 +25,24 @@ SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const 
  *  the neighbouring region whose plane fits them better. A region whose
  *  slope fit (weighted, its cells away from its border, trimmed at
  *  region_trim_k standard errors) holds at least region_min_cells cells is
- *  judged: steep when its angle to the floor's plane (the first judged
- *  region, nearest the robot, if level within the mounting's tilt
- *  uncertainty, else `ref`) plus noise_k standard errors exceeds
- *  max_slope_deg (its ground voxels become obstacles), gentle otherwise.
- *  A region the trimmed fit cannot judge (a ramp seen over a few rows at
- *  the end of the view) is judged by the plain fit over all its cells when
- *  that is one plane within the noise and can tell level from
- *  max_slope_deg: steep by the same test, never gentle.
+ *  judged (its border: other regions and voxels not judged, not the voxels
+ *  near depth_max):
+ *  steep when its angle to the floor's plane (the first judged region,
+ *  nearest the robot, if level within the mounting's tilt uncertainty and
+ *  its plane at z = 0 under the sensor, else `ref`) plus noise_k standard
+ *  errors exceeds max_slope_deg (its ground voxels become obstacles),
+ *  gentle otherwise. A region the trimmed fit cannot judge (a ramp seen
+ *  over a few rows at the end of the view) is judged by the plain fit over
+ *  all its cells when that is one plane within the noise and can tell level
+ *  from max_slope_deg: steep by the same test, never gentle.
  *  Gentle regions reached from the floor's region through borders without
- *  a step (and the floor's region itself when its plane lies at z = 0 under
- *  the sensor) get their obstacle voxels that pass rules 1-2 against the
- *  region's own plane, with the noise about that plane, back as ground, and
- *  so do the voxels no judged region holds (near depth_max, not flat within
- *  the level-floor model, in regions too small to judge) connected to such
- *  a region (not the floor's) through voxels near depth_max or ground
- *  voxels, against its plane. `decided` (one per cell) is set to 2
+ *  a step (and the floor's region itself) get their
+ *  obstacle voxels that pass rules 1-2 against the region's own plane, with
+ *  the noise about that plane, back as ground, and so do the voxels no
+ *  judged region holds (near depth_max, not flat within the level-floor
+ *  model, in regions too small to judge) connected to such a region (not
+ *  the floor's) through voxels near depth_max or ground voxels, against its
+ *  plane or a level-off of it (a landing). `decided` (one per cell) is set to 2
  *  on the voxels of steep regions and to 1 on those of gentle regions
  *  farther from the region's border than a max_slope_deg kink stays in the
  *  growth band (nearer ones keep rule 4's window: the first cells of a

@@ -259,15 +259,35 @@ void refineBorders(const ElevationGrid& g, const std::vector<int32_t>& seeds, do
   }
 }
 
+/** Per cell, whether a voxel no region holds marks a border of the regions
+ *  next to it (a kink or a step may lie there): a voxel not judged (not flat
+ *  within the noise, too few samples), except one near depth_max (the end of
+ *  the view, like the grid's edge: its means are biased, it is no other
+ *  surface; as a border it cut the fit's margin, up to ~0.7 m at 3.5 m with
+ *  3 times the noise, off a far ramp or landing and left it no interior to
+ *  judge). A lone voxel not judged among judged ones stays a border: without
+ *  it, a steep ramp seen over a few rows at the end of the view joined a
+ *  region judged gentle (5 more steep ramps clear in 2650 scenes). */
+void unjudgedBorders(const std::vector<VoxelClass>& classes, int m, const RegionCells& cs,
+                     std::vector<uint8_t>& border) {
+  const size_t mm = static_cast<size_t>(m) * m;
+  border.assign(mm, 0);
+  for (size_t q = 0; q < mm; ++q)
+    border[q] = classes[q] != VoxelClass::None && cs.label[q] < 0 && !cs.far[q];
+}
+
 /** City-block distance (cells) of every labelled cell to the nearest cell
- *  holding data outside its region (another region, a voxel not judged),
- *  two passes; cells without data and the grid's edge are no border (the
- *  end of the view is no kink). */
+ *  of another region or voxel no region holds that marks a border
+ *  (unjudgedBorders()), two passes; cells without data and the grid's edge
+ *  are no border (the end of the view is no kink). */
 void innerDistance(const std::vector<VoxelClass>& classes, int m, RegionCells& cs) {
   const size_t mm = static_cast<size_t>(m) * m;
   cs.inner.assign(mm, 0);
+  thread_local std::vector<uint8_t> border;
+  unjudgedBorders(classes, m, cs, border);
   auto relax = [&](size_t k, bool inside, size_t n) {
     if (!inside || classes[n] == VoxelClass::None) return;
+    if (cs.label[n] < 0 && !border[n]) return;
     const int32_t d = cs.label[n] != cs.label[k] ? 1 : cs.inner[n] + 1;
     cs.inner[k] = std::min(cs.inner[k], d);
   };
@@ -429,13 +449,15 @@ double surfaceNoise(const ElevationGrid& g, const PerceptionParams& p, const Poi
 }
 
 /** Rules 1 and 2 pass for voxel q against the plane of region l, with the
- *  noise about that plane (surfaceNoise()). */
+ *  noise about that plane (surfaceNoise()); with `level` (not NaN), against
+ *  the nearest of the heights between that plane's and `level` at q. */
 bool onRegionPlane(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
                    const Verdicts& vd, int32_t l, size_t q, const std::vector<float>& thr,
-                   const std::vector<float>& se) {
+                   const std::vector<float>& se, double level = std::nan("")) {
   const int m = g.cells(), i = static_cast<int>(q / m), j = static_cast<int>(q % m);
   const ElevationCell& c = g.at(i, j);
-  const double zp = vd.at(g, l, i, j);
+  double zp = vd.at(g, l, i, j);
+  if (!std::isnan(level)) zp = std::clamp(c.mean, std::min(zp, level), std::max(zp, level));
   const double sv = surfaceNoise(g, p, o, vd, l, q);
   const double t = std::max<double>(thr[q], p.noise_k * sv);
   if (std::max(std::abs(c.z_hi - zp), std::abs(c.z_lo - zp)) > t) return false;
@@ -446,23 +468,35 @@ bool onRegionPlane(const ElevationGrid& g, const PerceptionParams& p, const Poin
 /** Beyond the reached regions: the voxels no judged region holds (near
  *  depth_max, where the means are biased; not flat within the level-floor
  *  noise model; in a region too small to judge) connected to a reached
- *  region other than the floor's, breadth first, take that region's plane:
- *  an obstacle voxel (near depth_max any, elsewhere with at least d_min
- *  samples) that passes rules 1 and 2 against it, with the noise about that
- *  plane (surfaceNoise()), becomes ground. The search goes on through the voxels near depth_max and
- * the ground voxels (an obstacle stops it: nothing behind a step is reached). */
+ *  region other than the floor's, breadth first, take that region's plane
+ *  or a level-off of it: an obstacle voxel (near depth_max any, elsewhere
+ *  with at least d_min samples) becomes ground when it passes rules 1 and 2,
+ *  with the noise about that plane (surfaceNoise()), against a surface
+ *  that leaves the region's cell the search started from with the region's
+ *  slope or levels off there or anywhere farther (a landing at a ramp's top
+ *  or foot, parallel to the floor's plane, gradient `floor_g` per m): the
+ *  height nearest its mean between the region's plane and the floor's
+ *  parallel through that cell. A drop or a step beyond lies outside both;
+ *  a steeper slope rises above the region's plane. The search goes on
+ *  through the voxels near depth_max and the ground voxels (an obstacle
+ *  stops it: nothing behind a step is reached). */
 void extendBeyondRegions(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
                          const RegionCells& cs, const Verdicts& vd,
                          const std::vector<uint8_t>& reach, int32_t floor_id,
-                         const std::vector<float>& thr, const std::vector<float>& se,
-                         std::vector<VoxelClass>& classes, RegionCounts& rc) {
+                         const std::array<double, 2>& floor_g, const std::vector<float>& thr,
+                         const std::vector<float>& se, std::vector<VoxelClass>& classes,
+                         RegionCounts& rc) {
   const uint32_t min_n = static_cast<uint32_t>(std::max(1.0, p.d_min));
-  thread_local std::vector<int32_t> from, queue;
+  const int m = g.cells();
+  const double r = g.resolution();
+  thread_local std::vector<int32_t> from, start, queue;
   from.assign(classes.size(), -1);
+  start.assign(classes.size(), -1);
   queue.clear();
   for (size_t q = 0; q < classes.size(); ++q) {
     const int32_t l = cs.label[q];
-    if (l >= 0 && l != floor_id && reach[l] && vd.v[l] == 1) from[q] = l, queue.push_back(q);
+    if (l >= 0 && l != floor_id && reach[l] && vd.v[l] == 1)
+      from[q] = l, start[q] = static_cast<int32_t>(q), queue.push_back(q);
   }
   for (size_t h = 0; h < queue.size(); ++h) {
     const int32_t k = queue[h];
@@ -470,8 +504,12 @@ void extendBeyondRegions(const ElevationGrid& g, const PerceptionParams& p, cons
       const int32_t l = cs.label[q];
       if (from[q] >= 0 || classes[q] == VoxelClass::None || (l >= 0 && vd.v[l])) return;
       from[q] = from[k];
+      start[q] = start[k];
+      const int si = start[q] / m, sj = start[q] % m;
+      const double level =
+          vd.at(g, from[q], si, sj) + (floor_g[0] * (bi - si) + floor_g[1] * (bj - sj)) * r;
       if (classes[q] == VoxelClass::Obstacle && (cs.far[q] || g.at(bi, bj).n >= min_n) &&
-          onRegionPlane(g, p, o, vd, from[q], q, thr, se)) {
+          onRegionPlane(g, p, o, vd, from[q], q, thr, se, level)) {
         classes[q] = VoxelClass::Ground;
         ++rc.rescued;
       }
@@ -496,17 +534,17 @@ bool underRobot(const ElevationGrid& g, const PerceptionParams& p, const Point3f
 }
 
 /** Applies the verdicts: the ground voxels of steep regions become
- *  obstacles; the obstacle voxels of reached regions other than `skip`
- *  (the floor's region too when it lies under the robot, underRobot(): its
- *  plane is the floor's where the ground plane may lean, e.g. under a
- *  calibration error) become ground when rules 1 and 2 pass against the
+ *  obstacles; the obstacle voxels of reached regions (the floor's region
+ *  too: it lies under the robot, underRobot(), and its plane is the floor's
+ *  where the ground plane may lean, e.g. under a calibration error) become
+ *  ground when rules 1 and 2 pass against the
  *  region's own plane with the noise about it (onRegionPlane(); `thr`,
  *  `se`: per cell the rule-1 threshold and the mean's standard error; a
  *  threshold's cells may lie within the growth band, not within these);
  *  every voxel of a judged region is `decided`. */
 void applyVerdicts(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
                    const RegionCells& cs, const Verdicts& vd, const std::vector<uint8_t>& reach,
-                   int32_t skip, const std::vector<float>& thr, const std::vector<float>& se,
+                   const std::vector<float>& thr, const std::vector<float>& se,
                    std::vector<VoxelClass>& classes, std::vector<uint8_t>& decided,
                    RegionCounts& rc) {
   for (size_t q = 0; q < classes.size(); ++q) {
@@ -521,7 +559,7 @@ void applyVerdicts(const ElevationGrid& g, const PerceptionParams& p, const Poin
       ++rc.steep;
       continue;
     }
-    if (!reach[l] || l == skip || classes[q] != VoxelClass::Obstacle) continue;
+    if (!reach[l] || classes[q] != VoxelClass::Obstacle) continue;
     if (!onRegionPlane(g, p, o, vd, l, q, thr, se)) continue;
     classes[q] = VoxelClass::Ground;
     ++rc.rescued;
@@ -605,9 +643,13 @@ void judgeShortViews(const ElevationGrid& g, const PerceptionParams& p, const Re
 /** The verdict on every region of at least region_min_cells (in its slope
  *  fit too); returns the floor's region (-1: none). The floor slopes are
  *  measured against: the first judged region (seeded nearest the robot)
- *  when it is level within the mounting's tilt uncertainty, else `ref`. */
-int32_t judgeAll(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
-                 const Regions& rg, const SlopeReference& ref, Verdicts& vd, RegionFit& floor) {
+ *  when it is level within the mounting's tilt uncertainty and its plane
+ *  passes under the sensor at the robot's floor (underRobot(): a ramp whose
+ *  foot hides the floor in view, seen 4 deg tilted under a pitch error, is
+ *  not the floor its landing is measured against), else `ref`. */
+int32_t judgeAll(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
+                 const RegionCells& cs, const Regions& rg, const SlopeReference& ref, Verdicts& vd,
+                 RegionFit& floor) {
   const double r = g.resolution();
   const double tol = std::tan(std::sqrt(2.0) * p.prior_tilt_deg * M_PI / 180);
   floor = {{0, ref.gi / r, ref.gj / r, 0, 0}, ref.var / (r * r)};
@@ -625,7 +667,9 @@ int32_t judgeAll(const ElevationGrid& g, const PerceptionParams& p, const Region
         !trimmedFit(g, cs, one, rg.seeds[id], p.region_trim_k, vd.fit[id], n) || n < min_cells)
       continue;
     const RegionFit a = regionFit(vd.fit[id], n);
-    if (first && std::hypot(a.f.gx, a.f.gy) <= tol) floor = a, floor_id = static_cast<int32_t>(id);
+    if (first && std::hypot(a.f.gx, a.f.gy) <= tol &&
+        underRobot(g, p, o, vd, static_cast<int32_t>(id), a))
+      floor = a, floor_id = static_cast<int32_t>(id);
     first = false;
     vd.v[id] = regionSteep(a, floor, p) ? 2 : 1;
   }
@@ -646,7 +690,7 @@ RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p
   growAll(g, p, cs, rg);
   innerDistance(classes, g.cells(), cs);
   RegionFit floor;
-  const int32_t floor_id = judgeAll(g, p, cs, rg, ref, vd, floor);
+  const int32_t floor_id = judgeAll(g, p, o, cs, rg, ref, vd, floor);
   judgeShortViews(g, p, cs, rg, floor, vd);
   if (floor_id >= 0) {
     const double r = g.resolution();
@@ -654,10 +698,9 @@ RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p
     rc.floor_ref = {floor.f.gx * r, floor.f.gy * r, floor.se2 * r * r};
   }
   const std::vector<uint8_t> reach = reachedRegions(g, cs, vd, floor_id, p);
-  const bool floor_under_robot = floor_id >= 0 && underRobot(g, p, o, vd, floor_id, floor);
-  applyVerdicts(g, p, o, cs, vd, reach, floor_under_robot ? -1 : floor_id, thr, se, classes,
-                decided, rc);
-  extendBeyondRegions(g, p, o, cs, vd, reach, floor_id, thr, se, classes, rc);
+  applyVerdicts(g, p, o, cs, vd, reach, thr, se, classes, decided, rc);
+  extendBeyondRegions(g, p, o, cs, vd, reach, floor_id, {floor.f.gx, floor.f.gy}, thr, se, classes,
+                      rc);
   return rc;
 }
 
