@@ -501,9 +501,11 @@ void integrateVoxel(const IsmFrame& f, int32_t k) {
     // 'Inverse sensor model'.)
     const float pr =
         obstacle ? amp * IsmTables::at(gauss, D) : kg + (0.5f - kg) * IsmTables::at(sigm, D);
-    if (!at_voxel && pr < 0.5f &&
-        (f.below[k] ||
-         (cv > 1e-9 && noFreeEvidence(f, ci, cj, x * dc / cv, y * dc / cv, dc > near_edge))))
+    // A lower surface's ray passed above the cells before it: no free
+    // evidence from it, the walk ends where its obstacle's spread does.
+    if (f.below[k] && !at_voxel && pr <= 0.5f) return false;
+    if (!at_voxel && pr < 0.5f && cv > 1e-9 &&
+        noFreeEvidence(f, ci, cj, x * dc / cv, y * dc / cv, dc > near_edge))
       return true;
     if (pr > 0.5f && steep_window && !at_voxel && gentleVerdict(f, x * dc / cv, y * dc / cv))
       return true;
