@@ -14,8 +14,9 @@ namespace {
 
 /** What one image column has seen so far, from the bottom row up. */
 struct Column {
-  int f_row = -1, prev_row = -1;  // rows of the last floor point and the one before (-1: none)
-  int gap = 0, lower = 0;         // invalid rows / lower returns since the last floor point
+  int f_row = -1, prev_row = -1;       // rows of the last floor point and the one before (-1: none)
+  int gap = 0, lower = 0;              // invalid rows / lower returns since the last floor point
+  int first_low = -1, first_lows = 0;  // the column's first returns, lower (-1 lows: not first)
 };
 
 /** What a pixel is to its column's floor (classifyRow). */
@@ -96,6 +97,17 @@ struct ColumnScan {
     }
     ++edges;
   }
+  /** The column's first returns are lower than the floor: the floor ends
+   *  before the view (a drop edge in the blind zone under the camera).
+   *  Occupied evidence where the ray to q crosses the plane: the floor would
+   *  have been seen there. */
+  void markBeforeView(const Point3f& q) {
+    const double sq = plane.signedDistance(q.x, q.y, q.z);
+    if (sq >= 0) return;
+    const double t = so / (so - sq);
+    mark({static_cast<float>(o.x + t * (q.x - o.x)), static_cast<float>(o.y + t * (q.y - o.y)),
+          static_cast<float>(o.z + t * (q.z - o.z))});
+  }
   void step(Column& k, float& level, int8_t cls, double sd, size_t u, int v);
   void finish(Column& k, size_t u);
   const Point3f& at(int v, size_t u) const {
@@ -110,6 +122,7 @@ struct ColumnScan {
 constexpr int kGap = 4;          // invalid rows in a row: not the sensor's random dropout
 constexpr int kLower = 2;        // lower returns in a row: not one noisy sample
 constexpr float kFollow = 0.2f;  // weight of a new floor point in the level
+constexpr int kFirstLower = 4;   // a column's first returns lower than the floor: no floor seen
 
 /** After kGap invalid rows following a floor point: a drop when the floor
  *  there would still have returned within depth_max. */
@@ -132,10 +145,16 @@ void ColumnScan::step(Column& k, float& level, int8_t cls, double sd, size_t u, 
       level += kFollow * static_cast<float>(sd);
       return;
     case kLowerReturn:
-      if (k.f_row >= 0 && ++k.lower == kLower) mark(at(k.f_row, u));
+      if (k.f_row >= 0) {
+        if (++k.lower == kLower) mark(at(k.f_row, u));
+      } else if (k.first_lows >= 0) {
+        if (k.first_lows++ == 0) k.first_low = v;
+        if (k.first_lows == kFirstLower) markBeforeView(at(k.first_low, u));
+      }
       return;
     default:
       k = Column{};  // above the floor: an obstacle (its shadow is no drop)
+      k.first_lows = -1;
       level = 0;
   }
 }

@@ -71,6 +71,11 @@ const ParamTable<PerceptionParams>& PerceptionParams::table() {
                 "uncertainty of the mounting's pitch and of its roll (each): the steep-ground "
                 "rule measures slopes against the ground plane while it is tilted less than "
                 "sqrt(2) times this from the robot frame's level, against that level otherwise")
+          .flag("mounting_calibrated", &P::mounting_calibrated,
+                "the sensor pose is the robot's calibrated mounting (navigation sets it): a "
+                "plane more than d_pth below z = 0 at the robot is a lower floor beyond a drop "
+                "from the first frame on; otherwise only once a frame found the floor at z = 0 "
+                "(the pose of a recorded cloud may be off)")
           .real("seed_max_elevation", &P::seed_max_elevation, "m", 0, 100,
                 "the RRT seed must lie within this height of the floor the robot stands on "
                 "(robot frame z = 0): the robot pose is the initial guess of [Garrote17, Alg. 1]")

@@ -65,18 +65,20 @@ double msSince(Clock::time_point t0) {
  *  under the camera, behind the robot's turn), not floor the robot can
  *  drive onto: the frame is classified against z = 0, its voxels lie below
  *  it and are obstacles. Before the mounting is confirmed such a plane is
- *  kept and reported (the sensor pose may be off: check it). */
+ *  kept and reported (the sensor pose may be off: check it), unless the
+ *  mounting is known right (mounting_calibrated: a robot navigating, which
+ *  may start with a stair edge in the blind zone). */
 void Pipeline::lowerFloor(FrameResult& r) {
   const double off = r.ground.prior_offset;
   if (std::abs(off) <= p_.prior_height_tolerance) floor_confirmed_ = true;
-  if (!floor_confirmed_ || off >= -p_.d_pth) return;
+  if (!(floor_confirmed_ || p_.mounting_calibrated) || off >= -p_.d_pth) return;
   r.plane = Plane{};
   r.plane_source = "nominal";
   r.lower_floor = true;
   char buf[200];
   std::snprintf(buf, sizeof(buf),
                 "ground plane %.3f m below the robot's floor at the robot (more than d_pth "
-                "%.3f m) after that floor was seen at z = 0: a lower floor beyond a drop; "
+                "%.3f m), the mounting confirmed: a lower floor beyond a drop; "
                 "classified against z = 0",
                 -off, p_.d_pth);
   r.plane_note = buf;

@@ -55,7 +55,10 @@ NavigationSession::NavigationSession(SessionSetup setup)
       route_nav_(s_.nav),
       replanner_(s_.control_rate) {
   const auto locp = s_.profile.section<localization::LocalizationParams>("localization");
-  const auto percp = s_.profile.section<perception::PerceptionParams>("perception");
+  auto percp = s_.profile.section<perception::PerceptionParams>("perception");
+  // A robot navigates with its calibrated mounting: a floor in view below
+  // its own is a drop from the first frame on (it may start at a stair edge).
+  percp.mounting_calibrated = true;
   const auto recp = s_.profile.section<RecoveryParams>("nav.recovery");
   nav_.setRecoveryParams(recp);
   replanner_ = RouteReplanner(s_.control_rate, recp.avoid_after, recp.avoid_radius);

@@ -185,3 +185,44 @@ TEST(PerceptionOcclusion, TreadsSeenBeyondAStairEdgeAreNeverFree) {
   }
   std::printf("[ treads ] %zu of %zu cells beyond the edges free\n", free_total, cells_total);
 }
+
+TEST(PerceptionOcclusion, AStartWithTheDropEdgeInTheBlindZoneIsBlockedAtTheView) {
+  // A robot that starts (or has turned) with a drop's edge inside the blind
+  // zone sees only the lower floor: RRT-GPD takes it as the ground. With the
+  // mounting known right (navigation) it is a lower floor, a drop; and the
+  // image columns whose first returns lie below the floor mark where the ray
+  // crosses the floor's level: the floor would have been seen there. Before,
+  // the lower floor was free ground up to the robot and nothing was occupied
+  // before the second step's edge.
+  std::mt19937 rng(61);
+  std::uniform_real_distribution<double> U(0, 1);
+  for (int k = 0; k < 12; ++k) {
+    const double h = 0.5 + 0.7 * U(rng), pitch = (15 + 30 * U(rng)) * kDeg;
+    const double x_near = 0.2 + h / std::tan(pitch + 30 * kDeg);  // the view's near edge
+    const double xe = 0.3 + (x_near - 0.35) * U(rng), dz = 0.15 + 0.6 * U(rng);
+    Scene s;
+    s.floor(-10, xe).box({xe, 10, -10, 10, -2, -dz});
+    const mrpt::poses::CPose3D cam(0.2, 0, h, 0, pitch, 0);
+    const Cloud c = renderDepth(s, cam, 500 + k, 1.0, nullptr, 256, 212);
+    PerceptionParams p;
+    p.mounting_calibrated = true;
+    Pipeline pipe(p, Method::RrtGpd);
+    FrameInput in;
+    in.cloud = &c;
+    in.sensor_origin = {0.2f, 0.f, static_cast<float>(h)};
+    const FrameResult r = pipe.process(in, false);
+    EXPECT_TRUE(r.lower_floor) << "scene " << k << ": " << r.plane_note;
+    size_t occ, free, n;
+    counts(pipe.grid(), xe + 0.05, xe + 2.0, -0.3, 0.3, occ, free, n);
+    EXPECT_EQ(free, 0u) << "scene " << k << ": " << free << " of " << n << " cells beyond free";
+    // Occupied at the view's near edge, in every cell column of the corridor.
+    const auto& g = pipe.grid();
+    for (int j = g.cellY(-0.25); j <= g.cellY(0.25); ++j) {
+      bool blocked = false;
+      for (int i = g.cellX(xe); i <= g.cellX(x_near + 0.15); ++i) blocked |= g.prob(i, j) > 0.55;
+      EXPECT_TRUE(blocked) << "scene " << k << ": column y = " << g.centreY(j) << " open up to "
+                           << x_near + 0.15 << " (edge " << xe << ", h " << h << ", pitch "
+                           << pitch / kDeg << ")";
+    }
+  }
+}

@@ -32,6 +32,7 @@ struct PerceptionParams {
   int min_tree_nodes = 10;               ///< smaller trees are refused (never the ground plane)
   double prior_height_tolerance = 0.02;  ///< m, plane height at the robot consistent with z = 0
   double prior_tilt_deg = 3;             ///< deg, mounting tilt uncertainty (slope reference)
+  bool mounting_calibrated = false;      ///< the sensor pose is known right (Pipeline::lowerFloor)
   double seed_max_elevation = 0.3;  ///< m, seed elevation within this of the robot's floor (z = 0)
   int ransac_iterations = 200;      ///< final RANSAC (and the RANSAC-only baseline)
   double ransac_threshold = 0.02;   ///< m, inlier distance of the RANSAC planes
