@@ -27,6 +27,18 @@ void shares(const LocalOccupancy& g, double x0, double x1, double y0, double y1,
       free += g.prob(i, j) < 0.45 ? 1 : 0;
     }
 }
+/** One frame of `s` seen by a camera 0.2 m ahead of the axle, `h` high,
+ *  pitched `pitch` (rad), W x H pixels, into `pipe` at odometry `odo`. */
+FrameResult see(Pipeline& pipe, const Scene& s, double h, double pitch, unsigned seed, int W, int H,
+                const mrpt::poses::CPose2D& odo = {}) {
+  const Cloud c =
+      renderDepth(s, mrpt::poses::CPose3D(0.2, 0, h, 0, pitch, 0), seed, 1.0, nullptr, W, H);
+  FrameInput in;
+  in.cloud = &c;
+  in.sensor_origin = {0.2f, 0.f, static_cast<float>(h)};
+  in.odometry = odo;
+  return pipe.process(in, false);
+}
 }  // namespace
 
 TEST(PerceptionOcclusion, ShadowBehindADropIsNeverFree) {
@@ -42,13 +54,8 @@ TEST(PerceptionOcclusion, ShadowBehindADropIsNeverFree) {
     const double xe = 1.0 + U(rng), dz = 0.3 + 0.5 * U(rng);
     Scene s;
     s.floor(-10, xe).box({xe, 10, -10, 10, -2, -dz});
-    const mrpt::poses::CPose3D cam(0.2, 0, h, 0, pitch, 0);
-    const Cloud c = renderDepth(s, cam, 700 + k, 1.0, nullptr, 256, 212);
     Pipeline pipe(PerceptionParams{}, Method::RrtGpd);
-    FrameInput in;
-    in.cloud = &c;
-    in.sensor_origin = {0.2f, 0.f, static_cast<float>(h)};
-    pipe.process(in, false);
+    see(pipe, s, h, pitch, 700 + k, 256, 212);
     const double x_seen = xe + (xe - 0.2) * dz / h;  // lower floor visible from here
     size_t f = 0, n = 0;
     // The shadow, minus one cell at each end (the edge cell, the first lower cell).
@@ -106,18 +113,11 @@ Approach approachDrop(std::mt19937& rng, unsigned seed) {
   a.xe = 2.0 + U(rng);
   a.dz = 0.1 + 0.7 * U(rng);
   a.pipe = std::make_unique<Pipeline>(PerceptionParams{}, Method::RrtGpd);
-  const mrpt::poses::CPose3D cam(0.2, 0, a.h, 0, a.pitch, 0);
   const double x_near = 0.2 + a.h / std::tan(a.pitch + 30 * kDeg);  // the view's near edge
   for (double r = 0; a.xe - r > std::min(x_near - 0.15, 0.3); r += 0.05) {
     Scene s;  // in the robot frame: the robot at x = r of the world
     s.floor(-10, a.xe - r).box({a.xe - r, 10, -10, 10, -2, -a.dz});
-    const Cloud c =
-        renderDepth(s, cam, seed + static_cast<unsigned>(r * 100), 1.0, nullptr, 256, 212);
-    FrameInput in;
-    in.cloud = &c;
-    in.sensor_origin = {0.2f, 0.f, static_cast<float>(a.h)};
-    in.odometry = mrpt::poses::CPose2D(r, 0, 0);
-    a.pipe->process(in, false);
+    see(*a.pipe, s, a.h, a.pitch, seed + static_cast<unsigned>(r * 100), 256, 212, {r, 0, 0});
   }
   return a;
 }
@@ -168,13 +168,8 @@ TEST(PerceptionOcclusion, TreadsSeenBeyondAStairEdgeAreNeverFree) {
     Scene s;
     s.floor(-10, xe);
     for (int t = 0; t < 8; ++t) s.floor(xe + t * tread, xe + (t + 1) * tread, -rise * (t + 1));
-    const mrpt::poses::CPose3D cam(0.2, 0, h, 0, pitch, 0);
-    const Cloud c = renderDepth(s, cam, 300 + k, 1.0, nullptr, 128, 106);
     Pipeline pipe(PerceptionParams{}, Method::RrtGpd);
-    FrameInput in;
-    in.cloud = &c;
-    in.sensor_origin = {0.2f, 0.f, static_cast<float>(h)};
-    pipe.process(in, false);
+    see(pipe, s, h, pitch, 300 + k, 128, 106);
     size_t occ, free, n;
     counts(pipe.grid(), xe + 0.05, xe + 2.5, -0.3, 0.3, occ, free, n);
     EXPECT_EQ(free, 0u) << "scene " << k << ": " << free << " of " << n
@@ -202,15 +197,10 @@ TEST(PerceptionOcclusion, AStartWithTheDropEdgeInTheBlindZoneIsBlockedAtTheView)
     const double xe = 0.3 + (x_near - 0.35) * U(rng), dz = 0.15 + 0.6 * U(rng);
     Scene s;
     s.floor(-10, xe).box({xe, 10, -10, 10, -2, -dz});
-    const mrpt::poses::CPose3D cam(0.2, 0, h, 0, pitch, 0);
-    const Cloud c = renderDepth(s, cam, 500 + k, 1.0, nullptr, 256, 212);
     PerceptionParams p;
     p.mounting_calibrated = true;
     Pipeline pipe(p, Method::RrtGpd);
-    FrameInput in;
-    in.cloud = &c;
-    in.sensor_origin = {0.2f, 0.f, static_cast<float>(h)};
-    const FrameResult r = pipe.process(in, false);
+    const FrameResult r = see(pipe, s, h, pitch, 500 + k, 256, 212);
     EXPECT_TRUE(r.lower_floor) << "scene " << k << ": " << r.plane_note;
     size_t occ, free, n;
     counts(pipe.grid(), xe + 0.05, xe + 2.0, -0.3, 0.3, occ, free, n);
