@@ -78,7 +78,7 @@ void Pipeline::lowerFloor(FrameResult& r) {
   char buf[200];
   std::snprintf(buf, sizeof(buf),
                 "ground plane %.3f m below the robot's floor at the robot (more than d_pth "
-                "%.3f m), the mounting confirmed: a lower floor beyond a drop; "
+                "%.3f m), the mounting confirmed or calibrated: a lower floor beyond a drop; "
                 "classified against z = 0",
                 -off, p_.d_pth);
   r.plane_note = buf;
@@ -459,7 +459,8 @@ class PerceiveJob {
       res_.warnings.push_back(input + ": " + std::to_string(frames_lower_floor_) + " of " +
                               std::to_string(res_.frames) +
                               " frame(s): the only ground plane in view lay more than d_pth below "
-                              "the robot's floor seen before (a drop): classified against z = 0");
+                              "the robot's floor, the mounting confirmed or calibrated (a drop): "
+                              "classified against z = 0");
     if (frames_far_plane_ > 0)
       res_.warnings.push_back(input + ": " + std::to_string(frames_far_plane_) + " of " +
                               std::to_string(res_.frames) +

@@ -35,8 +35,8 @@ struct FrameResult {
   /** Why the plane is nominal (no seed / every tree refused / a lower floor), or that it
    *  lies farther from the robot's floor than prior_height_tolerance; empty otherwise. */
   std::string plane_note;
-  /** RRT-GPD's plane lay more than d_pth below the robot's floor after that
-   *  floor was seen at z = 0 (Pipeline::lowerFloor()): classified against z = 0. */
+  /** RRT-GPD's plane lay more than d_pth below the robot's floor, the mounting
+   *  confirmed or calibrated (Pipeline::lowerFloor()): classified against z = 0. */
   bool lower_floor = false;
   GroundPlaneResult ground;
   /** depth_noise_std of this frame over the profile's: the measured noise
