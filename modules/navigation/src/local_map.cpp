@@ -313,12 +313,19 @@ void FreeSpaceHistory::prune(double now, double keep, double keep_hits) {
 
 namespace {
 
-double segmentDistance(const Point2& a, const Point2& b, double x, double y) {
+/** Squared distance from (x, y) to the segment a-b (no square root: the
+ *  footprint queries take the least of several first). */
+double segmentDistance2(const Point2& a, const Point2& b, double x, double y) {
   const double vx = b.x - a.x, vy = b.y - a.y;
   const double l2 = vx * vx + vy * vy;
   double u = l2 > 0 ? ((x - a.x) * vx + (y - a.y) * vy) / l2 : 0;
   u = std::clamp(u, 0.0, 1.0);
-  return std::hypot(a.x + u * vx - x, a.y + u * vy - y);
+  const double ex = a.x + u * vx - x, ey = a.y + u * vy - y;
+  return ex * ex + ey * ey;
+}
+
+double segmentDistance(const Point2& a, const Point2& b, double x, double y) {
+  return std::sqrt(segmentDistance2(a, b, x, y));
 }
 
 }  // namespace
@@ -539,10 +546,11 @@ double LocalCostmap::outlineDistanceOf(double wx, double wy, const TPose2D& pose
                                        double s) const {
   const double dx = wx - pose.x, dy = wy - pose.y;
   const double rx = c * dx + s * dy, ry = -s * dx + c * dy;  // robot frame
-  double d = std::numeric_limits<double>::infinity();
+  double d2 = std::numeric_limits<double>::infinity();
   const auto& poly = fp_.polygon;
   for (size_t i = 0; i < poly.size(); ++i)
-    d = std::min(d, segmentDistance(poly[i], poly[(i + 1) % poly.size()], rx, ry));
+    d2 = std::min(d2, segmentDistance2(poly[i], poly[(i + 1) % poly.size()], rx, ry));
+  const double d = std::sqrt(d2);
   return fp_.contains(rx, ry) ? -d : d;
 }
 
@@ -596,7 +604,7 @@ double LocalCostmap::boxDistanceOf(size_t i, const TPose2D& pose, double c, doub
     const double wx = pose.x + c * v.x - s * v.y, wy = pose.y + s * v.x + c * v.y;
     const double ex = std::max({x0 - wx, 0.0, wx - x1}), ey = std::max({y0 - wy, 0.0, wy - y1});
     if (ex == 0 && ey == 0) return 0;  // a vertex in the box
-    d = std::min(d, std::hypot(ex, ey));
+    d = std::min(d, std::sqrt(ex * ex + ey * ey));
   }
   return d;
 }
