@@ -1,4 +1,5 @@
 #include <carenav/common/profile.h>
+#include <carenav/navigation/maneuver.h>
 #include <carenav/navigation/mrpt_ptg.h>
 #include <carenav/navigation/navigation_params.h>
 #include <carenav/navigation/recovery.h>
@@ -216,6 +217,10 @@ void registerProfileSections() {
   reg.add(SectionSchema::of(
       MrptPtgParams::table(), "nav.mrpt_ptg",
       "mrpt-ptg local planner: MRPT's TP-space reactive navigation (PTGs, holonomic method)"));
+  reg.add(SectionSchema::of(
+      ManeuverParams::table(), "nav.maneuver",
+      "footprint maneuvers of the recoveries: forward and reverse arcs and turns on the spot "
+      "to the route further on (Hybrid A* on the local cost map)"));
   reg.add(SectionSchema::of(
       RecoveryParams::table(), "nav.recovery",
       "recovery behaviours of goal robots: back out along the recent path, turn, wait, "

@@ -3,6 +3,9 @@
 
 #include <carenav/common/robot.h>
 
+#include <cmath>
+#include <vector>
+
 namespace carenav::navigation::test {
 
 /** The ISR-AIWALKER-like walker of [Rosa17] (Table 5.1 limits): 0.70 x
@@ -18,5 +21,25 @@ inline RobotParams walkerRobot() {
   r.safe_distance = 0.325;
   return r;
 }
+
+/** Points every 1 cm around a post of radius `r` at (x, y). */
+inline void post(std::vector<TPoint2D>& out, double x, double y, double r) {
+  for (int k = 0; k < 48; ++k)
+    out.push_back({x + r * std::cos(k * M_PI / 24), y + r * std::sin(k * M_PI / 24)});
+}
+
+/** A gap between two posts on the line x = gx, `width` m between their
+ *  surfaces, in a row of touching posts 1.1 m to either side of y = 0. */
+struct GapScene {
+  double gx = 0.6, width = 0.55, radius = 0.075;
+  std::vector<TPoint2D> obs;
+  explicit GapScene(double w) : width(w) {
+    const double c = width / 2 + radius;
+    for (int k = 0; k < 6; ++k) {
+      post(obs, gx, c + k * 2 * radius, radius);
+      post(obs, gx, -c - k * 2 * radius, radius);
+    }
+  }
+};
 
 }  // namespace carenav::navigation::test
