@@ -100,8 +100,8 @@ const ParamTable<ManeuverParams>& ManeuverParams::table() {
           .real("turn_deg", &P::turn_deg, "deg", 1, 90,
                 "heading change of an arc primitive and of a turn on the spot")
           .real("margin", &P::margin, "m", 0, 1,
-                "every primitive, continued this far, touches nothing (the supervisor's "
-                "margin for recovery moves)")
+                "every pose of a primitive, and of its continuation this far, keeps this much "
+                "from everything seen (the supervisor's margin for recovery moves)")
           .real("reverse_cost", &P::reverse_cost, "", 1, 100,
                 "a metre reversed costs this many metres forward")
           .real("switch_cost", &P::switch_cost, "m", 0, 10,
