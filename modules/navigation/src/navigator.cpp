@@ -29,8 +29,8 @@ Navigator::Navigator(const NavigationParams& p, const RobotParams& robot)
       }()),
       recovery_(RecoveryParams{}, robot, p) {}
 
-void Navigator::setRecoveryParams(const RecoveryParams& rp) {
-  recovery_ = Recovery(rp, robot_, p_);
+void Navigator::setRecoveryParams(const RecoveryParams& rp, const ManeuverParams& mp) {
+  recovery_ = Recovery(rp, robot_, p_, mp);
 }
 
 void Navigator::setOdometry(const TPose2D& pose, const Twist& measured, double t) {

@@ -26,6 +26,9 @@ constexpr double kPathSpacing = 0.03;
 constexpr double kBackLookahead = 0.3;
 /** Facing the route within this, a turn is done (rad: 15 deg). */
 constexpr double kFacing = 15.0 * M_PI / 180.0;
+/** A maneuver is planned again at most this many times (a step ended off
+ *  its pose, or its command is no longer admissible). */
+constexpr int kManeuverReplans = 3;
 /** A back-out that has not yet reached a place where the robot can turn to
  *  face the route goes on up to this many times `backup_distance`. */
 constexpr double kTurnableBackups = 3.0;
@@ -80,8 +83,9 @@ const ParamTable<RecoveryParams>& RecoveryParams::table() {
   return t;
 }
 
-Recovery::Recovery(const RecoveryParams& p, const RobotParams& robot, const NavigationParams& nav)
-    : p_(p), r_(robot), nav_(nav) {
+Recovery::Recovery(const RecoveryParams& p, const RobotParams& robot, const NavigationParams& nav,
+                   const ManeuverParams& mp)
+    : p_(p), r_(robot), nav_(nav), planner_(mp, robot) {
   for (const auto& q : r_.footprint) lever_ = std::max(lever_, std::hypot(q.x, q.y));
 }
 
@@ -89,6 +93,8 @@ const char* Recovery::phaseName(Phase p) {
   switch (p) {
     case Phase::Idle:
       return "";
+    case Phase::Maneuver:
+      return "maneuver";
     case Phase::BackUp:
       return "back out";
     case Phase::Spin:
@@ -283,6 +289,21 @@ void Recovery::start(double now, const PlannerInput& in, const std::string& why)
   backed_ = spun_ = spin_dir_ = 0;
   facing_ = false;
   blocked_since_.reset();
+  man_ = planManeuver(in);
+  if (man_) {
+    phase_ = Phase::Maneuver;
+    man_step_ = 0;
+    man_done_ = 0;
+    man_replans_ = 0;
+    man_finished_ = false;
+    man_limit_ = now + maneuverDuration(*man_) * 3 + 2.0;
+    return;
+  }
+  startFallback(now, in);
+}
+
+void Recovery::startFallback(double now, const PlannerInput& in) {
+  phase_t0_ = now;
   if (in.map && backOutCommand(*in.map, in.pose)) {
     phase_ = Phase::BackUp;
   } else if (auto s = spinCommand(in)) {
@@ -291,6 +312,110 @@ void Recovery::start(double now, const PlannerInput& in, const std::string& why)
   } else {
     phase_ = Phase::Wait;
   }
+}
+
+double Recovery::maneuverSpeed(int dir) const {
+  return std::min(p_.backup_speed, dir < 0 ? -r_.v_min : r_.v_max);
+}
+
+double Recovery::maneuverTurnRate() const {
+  // the footprint's corner no faster than twice the straights' speed
+  return std::min(0.5 * r_.w_max, 2 * maneuverSpeed(1) / std::max(lever_, 0.05));
+}
+
+double Recovery::maneuverDuration(const Maneuver& m) const {
+  double t = 0;
+  for (const auto& s : m.steps)
+    t += s.dir == 0 ? std::abs(s.turn) / maneuverTurnRate() : s.length / maneuverSpeed(s.dir);
+  return t;
+}
+
+std::optional<TPose2D> Recovery::maneuverGoal(const PlannerInput& in) const {
+  if (in.path.size() < 2 || !in.map) return std::nullopt;
+  const ManeuverParams& mp = planner_.params();
+  const double x = in.pose.x, y = in.pose.y;
+  for (double along = mp.reach; along <= mp.reach + 1.0 + 1e-9; along += 0.25) {
+    const TPoint2D a = lookaheadPoint(in.path, x, y, along);
+    TPoint2D b = lookaheadPoint(in.path, x, y, along + 0.2);
+    TPoint2D o = a;
+    if (std::hypot(b.x - a.x, b.y - a.y) < 0.05) {  // the route's end: its last way
+      o = lookaheadPoint(in.path, x, y, std::max(0.0, along - 0.2));
+      b = a;
+    }
+    if (std::hypot(b.x - o.x, b.y - o.y) < 0.05) return std::nullopt;
+    const TPose2D g{a.x, a.y, std::atan2(b.y - o.y, b.x - o.x)};
+    const FootprintCheck k = in.map->check(g, mp.margin);
+    if (!k.collision && !k.outside && k.clearance >= mp.margin) return g;
+    if (b.x == a.x && b.y == a.y) return std::nullopt;  // nothing further to try
+  }
+  return std::nullopt;
+}
+
+std::optional<Maneuver> Recovery::planManeuver(const PlannerInput& in) const {
+  if (!planner_.params().enabled || !in.map) return std::nullopt;
+  const auto goal = maneuverGoal(in);
+  if (!goal) return std::nullopt;
+  // Reversing only over the way the robot came (its footprint swept it).
+  const double inscribed = in.map->footprint().inscribed;
+  const auto swept = [&](const TPose2D& q) {
+    return distanceToPoses(path_, q.x, q.y) <= inscribed;
+  };
+  auto m = planner_.plan(*in.map, in.pose, *goal, swept);
+  if (m && m->steps.empty()) return std::nullopt;  // already there: nothing to maneuver
+  return m;
+}
+
+std::optional<Twist> Recovery::stepCommand(const PlannerInput& in, const ManeuverStep& s,
+                                           double remaining) const {
+  const double step_dt = motion_ ? motion_->period : nav_.sim_step;
+  Twist cmd;
+  if (s.dir == 0) {
+    cmd.w = std::copysign(std::min(maneuverTurnRate(), remaining / step_dt), s.turn);
+  } else {
+    const double u = std::min(maneuverSpeed(s.dir), remaining / step_dt);
+    cmd.v = s.dir * u;
+    cmd.w = u * s.turn / s.length;  // the arc's heading change per metre
+  }
+  // The supervisor's rule looks a cycle further at speed than the
+  // maneuver's margin: slower, it looks no further than the margin.
+  for (const double scale : {1.0, 0.5, 0.25}) {
+    const Twist c{cmd.v * scale, cmd.w * scale};
+    if (brakingScale(*in.map, in.pose, c, r_, nav_.sim_step, p_.backup_margin,
+                     motion_ ? &*motion_ : nullptr) >= 1.0)
+      return c;
+  }
+  return std::nullopt;
+}
+
+bool Recovery::replanManeuver(const PlannerInput& in) {
+  if (++man_replans_ > kManeuverReplans) return false;
+  man_ = planManeuver(in);
+  man_step_ = 0;
+  man_done_ = 0;
+  return man_.has_value();
+}
+
+std::optional<Twist> Recovery::maneuverCommand(const PlannerInput& in) {
+  while (man_ && man_step_ < man_->steps.size()) {
+    const ManeuverStep& s = man_->steps[man_step_];
+    const double remaining = (s.dir == 0 ? std::abs(s.turn) : s.length) - man_done_;
+    if (remaining > (s.dir == 0 ? 0.02 : 0.01)) {
+      if (auto c = stepCommand(in, s, remaining)) return c;
+      // Not admissible from where the robot is, with what it sees now:
+      // planned again from here.
+      if (!replanManeuver(in)) return std::nullopt;
+      continue;
+    }
+    // The step is done: on to the next, planned again when the robot
+    // ended it off its pose.
+    const bool off = std::hypot(in.pose.x - s.end.x, in.pose.y - s.end.y) > 0.1 ||
+                     std::abs(angleDiff(in.pose.phi, s.end.phi)) > mrpt::DEG2RAD(10.0);
+    ++man_step_;
+    man_done_ = 0;
+    if (off && man_step_ < man_->steps.size() && !replanManeuver(in)) return std::nullopt;
+  }
+  man_finished_ = true;
+  return std::nullopt;
 }
 
 void Recovery::cutRetraced() {
@@ -354,6 +479,21 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
     start(now, in, why);
   }
   // The recovery under way.
+  if (phase_ == Phase::Maneuver && !man_) startFallback(now, in);
+  if (phase_ == Phase::Maneuver) {
+    const auto& st = man_->steps[std::min(man_step_, man_->steps.size() - 1)];
+    man_done_ += st.dir == 0 ? std::abs(angleDiff(in.pose.phi, last_pose_.phi))
+                             : std::hypot(in.pose.x - last_pose_.x, in.pose.y - last_pose_.y);
+    last_pose_ = in.pose;
+    std::optional<Twist> c;
+    if (now <= man_limit_) c = maneuverCommand(in);
+    if (c) return command(*c, "recovery (" + reason_ + "): maneuver");
+    if (man_finished_) {
+      finish(now);
+      return command({0, 0}, "recovery (" + reason_ + "): maneuvered, replanning");
+    }
+    startFallback(now, in);  // not admissible any more, or too long: back out, turn or wait
+  }
   if (phase_ == Phase::BackUp) {
     backed_ += std::hypot(in.pose.x - last_pose_.x, in.pose.y - last_pose_.y);
     last_pose_ = in.pose;

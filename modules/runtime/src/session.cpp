@@ -60,7 +60,7 @@ NavigationSession::NavigationSession(SessionSetup setup)
   // its own is a drop from the first frame on (it may start at a stair edge).
   percp.mounting_calibrated = true;
   const auto recp = s_.profile.section<RecoveryParams>("nav.recovery");
-  nav_.setRecoveryParams(recp);
+  nav_.setRecoveryParams(recp, s_.profile.section<ManeuverParams>("nav.maneuver"));
   replanner_ = RouteReplanner(s_.control_rate, recp.avoid_after, recp.avoid_radius);
   walker_ = nav_.planner().needsUserIntent();
   for (const auto& sp : s_.sensors)

@@ -4,6 +4,8 @@
 #include <carenav/navigation/recovery.h>
 #include <carenav/navigation/safety.h>
 
+#include "fixtures.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -673,10 +675,13 @@ TEST(Recovery, BacksOutOfAWedgeUntilItCanTurnAndFacesTheRouteBeforeReplanning) {
   // The robot came up skewed along y = x * tan(0.7) and is wedged (Wedge):
   // backing out by backup_distance and handing back to the planner sent it
   // straight back into the mouth skewed, over and over. It backs out to
-  // where its footprint can turn and turns to face the route first.
+  // where its footprint can turn and turns to face the route first (the
+  // fallback when no footprint maneuver is found: maneuvers off here).
   Wedge w;
   RecoveryParams rp;
-  Recovery rec(rp, w.r, w.nav);
+  ManeuverParams no_maneuver;
+  no_maneuver.enabled = false;
+  Recovery rec(rp, w.r, w.nav, no_maneuver);
   LocalCostmap map(w.nav, Footprint(w.r.footprint, w.nav.resolution));
   map.build({0, 0}, w.obs);
   for (double d = -1.5; d <= 1e-9; d += 0.02)
@@ -713,6 +718,76 @@ TEST(Recovery, BacksOutOfAWedgeUntilItCanTurnAndFacesTheRouteBeforeReplanning) {
   // The retraced part of the recorded path is cut: it ends where the robot is.
   ASSERT_FALSE(rec.path().empty());
   EXPECT_LT(std::hypot(rec.path().back().x - in.pose.x, rec.path().back().y - in.pose.y), 0.1);
+}
+
+/** Drives the recovery of a robot held at `start` (exact motion, 0.1 s
+ *  cycles) until it asks for a replan; every command passes the
+ *  supervisor's rule and nothing is touched. Returns the end pose and
+ *  whether a maneuver step was among the commands. */
+std::pair<TPose2D, bool> recoverFrom(Recovery& rec, const LocalCostmap& map, const TPose2D& start,
+                                     const std::vector<TPoint2D>& route, const RobotParams& r,
+                                     const NavigationParams& nav, double margin) {
+  PlannerInput in;
+  in.map = &map;
+  in.pose = start;
+  in.path = route;
+  PlannerOutput wedged;
+  wedged.ok = true;
+  wedged.wedged = true;
+  bool maneuvered = false;
+  double t = 0;
+  for (int k = 0; k < 600; ++k, t += 0.1) {
+    const auto o = rec.step(t, in, wedged, true, 5.0);
+    if (rec.takeReplanRequest()) break;
+    if (!o) continue;
+    EXPECT_TRUE(o->ok) << o->note;
+    maneuvered |= o->note.find("maneuver") != std::string::npos;
+    EXPECT_GE(brakingScale(map, in.pose, o->cmd, r, nav.sim_step, margin), 1.0) << o->note;
+    in.pose = move(in.pose, o->cmd, 0.1);
+    EXPECT_FALSE(map.check(in.pose).collision) << "t " << t << " " << o->note;
+    rec.recordPose(in.pose);
+  }
+  return {in.pose, maneuvered};
+}
+
+TEST(Recovery, ManeuversThroughTheGapMouthItIsWedgedInWhereBackingOutStaysBefore) {
+  // Skewed at a 0.55 m gap's mouth (the robot is 0.43 m wide), its front
+  // 3-6 cm from a post: a footprint maneuver (a step back, turns, and on
+  // through) ends on the route beyond the gap, facing its way. Backing out
+  // along the way it came leaves it before the gap (the planner's turn).
+  const NavigationParams nav;
+  const RobotParams r = fastRobotAt(0.5);
+  const test::GapScene g(0.55);
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, g.obs);
+  const std::vector<TPoint2D> route{{-1.5, 0}, {0, 0}, {3, 0}};
+  for (const double skew : {0.5, -0.6, 0.8}) {
+    // Driven up along a skewed line until the front is within 6 cm of a post.
+    const double y0 = skew > 0 ? -0.1 : 0.1;
+    std::vector<TPose2D> came;
+    TPose2D p{g.gx - 0.9 * std::cos(skew), y0 - 0.9 * std::sin(skew), skew};
+    while (map.check(p, 0.1).clearance >= 0.06 && !map.check(p, 0.1).collision) {
+      came.push_back(p);
+      p = integrateArc(p, 0.005, 0, 1.0);
+    }
+    ASSERT_FALSE(map.check(p).collision) << skew;
+    RecoveryParams rp;
+    for (const bool maneuvers : {true, false}) {
+      ManeuverParams mp;
+      mp.enabled = maneuvers;
+      Recovery rec(rp, r, nav, mp);
+      for (const auto& q : came) rec.recordPose(q);
+      const auto [end, maneuvered] = recoverFrom(rec, map, p, route, r, nav, rp.backup_margin);
+      EXPECT_EQ(maneuvered, maneuvers) << skew;
+      if (maneuvers) {
+        EXPECT_GT(end.x, g.gx + 0.3) << "skew " << skew;
+        EXPECT_LT(std::abs(end.y), mp.goal_radius + 0.1) << "skew " << skew;
+        EXPECT_LT(std::abs(std::remainder(end.phi, 2 * M_PI)), mrpt::DEG2RAD(mp.goal_deg + 10));
+      } else {
+        EXPECT_LT(end.x, g.gx) << "skew " << skew;
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -28,7 +28,7 @@ struct ManeuverParams {
   double goal_deg = 30;         ///< deg, ... facing the route's way within this
   double step = 0.1;            ///< m, length of a straight or arc primitive
   double turn_deg = 15;         ///< deg, heading change of an arc and of a turn on the spot
-  double margin = 0.03;         ///< m, every primitive, continued this much, touches nothing
+  double margin = 0.03;         ///< m, kept by every primitive and its continuation this far
   double reverse_cost = 2.0;    ///< a metre reversed costs this many driven forward
   double switch_cost = 0.3;     ///< m, extra cost of changing between forward and reverse
   double clearance_cost = 1.0;  ///< m per m, extra cost of a primitive passing at no clearance

@@ -62,9 +62,10 @@ class Navigator {
   void setRotateRequest(bool on) { rotate_request_ = on; }
   bool rotateRequested() const { return rotate_request_; }
 
-  /** The recovery behaviours of a goal robot ([nav.recovery]; defaults
+  /** The recovery behaviours of a goal robot ([nav.recovery], its maneuvers
+   *  [nav.maneuver]; defaults
    *  otherwise). A walker's user drives: no recovery. */
-  void setRecoveryParams(const RecoveryParams& p);
+  void setRecoveryParams(const RecoveryParams& p, const ManeuverParams& mp = {});
   const Recovery& recovery() const { return recovery_; }
 
   /** Goal navigation: a route (map frame) ending at the goal. */

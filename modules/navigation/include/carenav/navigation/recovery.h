@@ -1,6 +1,7 @@
 // Recovery behaviours around every goal plugin: when the robot is boxed in
 // (no admissible trajectory, or the supervisor keeps stopping it) or makes
-// no progress along its route, it backs out along the way it came (the
+// no progress along its route, it maneuvers its footprint to the route
+// further on (maneuver.h), else backs out along the way it came (the
 // recent path is known free), else turns on the spot where the footprint
 // can, else waits; then the planner resumes on a fresh route. After
 // `max_attempts` recoveries without progress it gives up, with the reason.
@@ -12,6 +13,7 @@
 #include <carenav/common/robot.h>
 #include <carenav/navigation/local_map.h>
 #include <carenav/navigation/local_planner.h>
+#include <carenav/navigation/maneuver.h>
 
 #include <optional>
 #include <string>
@@ -53,8 +55,9 @@ struct RecoveryParams {
  *  tests/unit/navigation/test_recovery.cpp. */
 class Recovery {
  public:
-  enum class Phase { Idle, BackUp, Spin, Wait, GaveUp };
-  Recovery(const RecoveryParams& p, const RobotParams& robot, const NavigationParams& nav);
+  enum class Phase { Idle, Maneuver, BackUp, Spin, Wait, GaveUp };
+  Recovery(const RecoveryParams& p, const RobotParams& robot, const NavigationParams& nav,
+           const ManeuverParams& mp = {});
 
   /** The robot's pose each cycle (its recent path: known free). */
   void recordPose(const TPose2D& pose);
@@ -97,6 +100,8 @@ class Recovery {
     return r;
   }
   const std::vector<TPose2D>& path() const { return path_; }
+  /** The maneuver under way (Phase::Maneuver), for pictures and tests. */
+  const std::optional<Maneuver>& maneuver() const { return man_; }
 
  private:
   void start(double now, const PlannerInput& in, const std::string& why);
@@ -115,10 +120,41 @@ class Recovery {
    *  can turn on the spot to within kFacing of it. */
   bool canFaceRoute(const PlannerInput& in) const;
   size_t nearestIndex(const TPose2D& pose) const;
+  /** A footprint maneuver from the robot to the route `reach` m further on
+   *  (ManeuverPlanner; reversing only over the way the robot came). */
+  std::optional<Maneuver> planManeuver(const PlannerInput& in) const;
+  /** The pose the maneuver aims at: on the route, facing its way, where the
+   *  footprint touches nothing (the first such from `reach` on). */
+  std::optional<TPose2D> maneuverGoal(const PlannerInput& in) const;
+  /** The command of the maneuver's current step; none when it is done or
+   *  its command is not admissible (then man_done_ says which). */
+  std::optional<Twist> maneuverCommand(const PlannerInput& in);
+  /** The admissible command of step `s` with `remaining` m or rad of it
+   *  left (slowed when the supervisor's rule needs it); none when none is. */
+  std::optional<Twist> stepCommand(const PlannerInput& in, const ManeuverStep& s,
+                                   double remaining) const;
+  /** Plans the maneuver again from the robot's pose (kManeuverReplans
+   *  times at most); false when that is used up or none is found. */
+  bool replanManeuver(const PlannerInput& in);
+  /** m/s of a maneuver's straights and arcs (`dir` 1 forward, -1 reverse):
+   *  backup_speed within the robot's limits; rad/s of its turns on the spot. */
+  double maneuverSpeed(int dir) const;
+  double maneuverTurnRate() const;
+  /** s, the maneuver at those speeds. */
+  double maneuverDuration(const Maneuver& m) const;
+  /** The back-out, turn or wait that begins a recovery without a maneuver. */
+  void startFallback(double now, const PlannerInput& in);
 
   RecoveryParams p_;
   RobotParams r_;
   NavigationParams nav_;
+  ManeuverPlanner planner_;
+  std::optional<Maneuver> man_;
+  size_t man_step_ = 0;   // the step under way
+  double man_done_ = 0;   // m or rad of it done
+  double man_limit_ = 0;  // s, the maneuver is abandoned after this
+  int man_replans_ = 0;   // maneuvers planned again after a step ended off its pose
+  bool man_finished_ = false;
   std::vector<TPose2D> path_;  // oldest first
   /** The odometry travelled and turned (m, rad) when each pose of path_ was
    *  recorded, and since the start. */
