@@ -117,5 +117,37 @@ TEST(ManeuverPlanner, NeverReversesWhereItMayNotAndFindsNothingThroughAWall) {
   EXPECT_FALSE(ManeuverPlanner(few, r).plan(closed, start, goal));
 }
 
+TEST(ManeuverPlanner, LeavesAContactWithoutComingNearerAndRefusesAPointInside) {
+  // Driven on until its front is 1 cm from a post (within the padding: in
+  // contact for the cost map), the robot still gets a maneuver, and no pose
+  // of it comes nearer than that; with a post's point inside its outline it
+  // gets none.
+  NavigationParams nav;
+  const RobotParams r = clutterRobot();
+  const GapScene g(0.55);
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, g.obs);
+  TPose2D start{-0.5, 0.3, 0.5};
+  while (map.outlineClearance(applyPrimitive(start, 1, 0.002, 0)) > 0.01)
+    start = applyPrimitive(start, 1, 0.002, 0);
+  ASSERT_TRUE(map.check(start).collision);
+  const double d0 = map.outlineClearance(start);
+  ASSERT_GT(d0, 0.0);
+  const auto m = ManeuverPlanner(ManeuverParams{}, r).plan(map, start, {g.gx + 0.6, 0, 0});
+  ASSERT_TRUE(m);
+  TPose2D at = start;
+  for (const auto& s : m->steps) {
+    for (int i = 1; i <= 50; ++i)
+      EXPECT_GE(map.outlineClearance(applyPrimitive(at, s.dir, s.length * i / 50, s.turn * i / 50)),
+                d0 - 0.011);
+    at = s.end;
+  }
+  std::vector<TPoint2D> inside = g.obs;
+  inside.push_back({start.x, start.y});
+  LocalCostmap touched(nav, Footprint(r.footprint, nav.resolution));
+  touched.build({0, 0}, inside);
+  EXPECT_FALSE(ManeuverPlanner(ManeuverParams{}, r).plan(touched, start, {g.gx + 0.6, 0, 0}));
+}
+
 }  // namespace
 }  // namespace carenav::navigation
