@@ -13,8 +13,6 @@ namespace carenav::navigation {
 
 namespace {
 
-double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
-
 /** Distance from p to the polyline (or to its only point). */
 double distanceToPath(const std::vector<TPoint2D>& path, double x, double y) {
   return path.empty() ? 0 : nearestOnPolyline(path, x, y).distance;

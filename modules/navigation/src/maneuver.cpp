@@ -13,8 +13,6 @@ namespace carenav::navigation {
 
 namespace {
 
-double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
-
 /** Least spacing of the footprint checks along a primitive (m of travel of
  *  the footprint's farthest corner): the next check is as far on as the
  *  clearance above the floor allows (the outline moves no more than the
@@ -205,6 +203,7 @@ std::optional<Maneuver> ManeuverPlanner::plan(const LocalCostmap& map, const TPo
   std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
   open.push({h(start), 0});
   size_t expanded = 0;
+  std::vector<Primitive> cand;
   while (!open.empty() && expanded < static_cast<size_t>(p_.max_nodes)) {
     const int i = open.top().second;
     open.pop();
@@ -241,7 +240,7 @@ std::optional<Maneuver> ManeuverPlanner::plan(const LocalCostmap& map, const TPo
     // The primitives, and a turn on the spot onto the goal's lattice of
     // headings (goal heading plus whole turn_deg steps) for a robot off it:
     // the narrow gap is only passed near the goal's heading.
-    std::vector<Primitive> cand = prims_;
+    cand.assign(prims_.begin(), prims_.end());
     const double off = std::remainder(cur.pose.phi - goal.phi, a);
     if (std::abs(off) > 1e-6) {
       cand.push_back({0, 0, -off});

@@ -59,8 +59,6 @@ std::string ptgCacheFile(const std::string& description, const std::string& key)
   return (dir / ("ptg_" + name.substr(0, 60) + "_" + std::to_string(h) + ".bin.gz")).string();
 }
 
-double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
-
 /** The polygon offset outwards by `d` (mitred corners): each vertex moves
  *  along the sum of its two edges' outward unit normals n1, n2 by
  *  d / (1 + n1 . n2), which keeps every edge parallel at distance d. */

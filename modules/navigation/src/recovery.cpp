@@ -13,8 +13,6 @@ namespace carenav::navigation {
 
 namespace {
 
-double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
-
 /** Distance from (x, y) to the polyline of the poses' positions. */
 double distanceToPoses(const std::vector<TPose2D>& path, double x, double y) {
   return nearestOnPolyline(path, x, y).distance;  // +inf when empty

@@ -7,6 +7,7 @@
 #include <carenav/navigation/local_map.h>
 #include <carenav/navigation/navigation_params.h>
 
+#include <cmath>
 #include <functional>
 #include <limits>
 #include <map>
@@ -25,6 +26,9 @@ struct Twist {
 
 /** Pose after moving for `t` seconds at constant (v, w) from `p` (exact arc). */
 TPose2D integrateArc(const TPose2D& p, double v, double w, double t);
+
+/** rad, a - b wrapped to [-pi, pi]. */
+inline double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
 
 /** Where a new command starts from: the robot does not take it at once.
  *  The command sent now takes effect `latency` seconds later (until then
