@@ -79,6 +79,38 @@ class DistanceToGoal {
   std::vector<double> d_;
 };
 
+/** A pose the search reached: the step that led there (its `end` the
+ *  pose), the cost so far, the clearance there (capped), the node before
+ *  it, and the last direction driven (1, -1; 0 before any). */
+struct SearchNode {
+  ManeuverStep step;
+  double g = 0, clearance = 0;
+  int parent = -1, dir = 0;
+};
+
+/** The steps from the start to node `i`, consecutive equal ones merged (a
+ *  run of straights, of arcs of one curvature, of turns one way). */
+std::vector<ManeuverStep> stepsTo(const std::vector<SearchNode>& nodes, int i) {
+  std::vector<ManeuverStep> steps;
+  for (int k = i; nodes[static_cast<size_t>(k)].parent >= 0;
+       k = nodes[static_cast<size_t>(k)].parent)
+    steps.push_back(nodes[static_cast<size_t>(k)].step);
+  std::reverse(steps.begin(), steps.end());
+  std::vector<ManeuverStep> merged;
+  for (const auto& s : steps) {
+    if (!merged.empty() && merged.back().dir == s.dir &&
+        std::abs(merged.back().turn * s.length - s.turn * merged.back().length) < 1e-9 &&
+        (s.dir != 0 || merged.back().turn * s.turn > 0)) {
+      merged.back().length += s.length;
+      merged.back().turn += s.turn;
+      merged.back().end = s.end;
+    } else {
+      merged.push_back(s);
+    }
+  }
+  return merged;
+}
+
 }  // namespace
 
 const ParamTable<ManeuverParams>& ManeuverParams::table() {
@@ -166,13 +198,6 @@ ManeuverPlanner::Sweep ManeuverPlanner::sweep(const LocalCostmap& map, const TPo
 std::optional<Maneuver> ManeuverPlanner::plan(const LocalCostmap& map, const TPose2D& start,
                                               const TPose2D& goal,
                                               const ReverseGate& reverse_ok) const {
-  struct Node {
-    TPose2D pose;
-    double g, clearance;  // clearance: m, capped at clearance_influence
-    int parent;
-    Primitive prim;  // the one that led here
-    int dir;
-  };
   const double kres = p_.step / 2, a = mrpt::DEG2RAD(p_.turn_deg);
   const int nh = std::max(1, static_cast<int>(std::lround(2 * M_PI / a)));
   auto key = [&](const TPose2D& q) {
@@ -197,7 +222,8 @@ std::optional<Maneuver> ManeuverPlanner::plan(const LocalCostmap& map, const TPo
   const double floor =
       c0.collision ? 0.999 * map.outlineClearance(start) : std::min(p_.margin, c0.clearance);
   if (!(floor > 0)) return std::nullopt;
-  std::vector<Node> nodes{{start, 0.0, c0.collision ? floor : c0.clearance, -1, {0, 0, 0}, 0}};
+  std::vector<SearchNode> nodes{
+      {{0, 0, 0, start}, 0.0, c0.collision ? floor : c0.clearance, -1, 0}};
   std::unordered_map<int64_t, double> best{{key(start), 0.0}};
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
@@ -207,47 +233,22 @@ std::optional<Maneuver> ManeuverPlanner::plan(const LocalCostmap& map, const TPo
   while (!open.empty() && expanded < static_cast<size_t>(p_.max_nodes)) {
     const int i = open.top().second;
     open.pop();
-    const Node cur = nodes[static_cast<size_t>(i)];
-    if (cur.g > best[key(cur.pose)] + 1e-9) continue;  // a cheaper way here was found
-    if (atGoal(cur.pose)) {
-      // The steps back to the start, equal neighbours merged.
-      Maneuver out;
-      out.cost = cur.g;
-      out.expanded = expanded;
-      for (int k = i; nodes[static_cast<size_t>(k)].parent >= 0;
-           k = nodes[static_cast<size_t>(k)].parent) {
-        const Node& nd = nodes[static_cast<size_t>(k)];
-        const Primitive& m = nd.prim;
-        out.steps.push_back({m.dir, m.length, m.turn, nd.pose});
-      }
-      std::reverse(out.steps.begin(), out.steps.end());
-      std::vector<ManeuverStep> merged;
-      for (const auto& s : out.steps) {
-        if (!merged.empty() && merged.back().dir == s.dir &&
-            std::abs(merged.back().turn * s.length - s.turn * merged.back().length) < 1e-9 &&
-            (s.dir != 0 || merged.back().turn * s.turn > 0)) {
-          merged.back().length += s.length;
-          merged.back().turn += s.turn;
-          merged.back().end = s.end;
-        } else {
-          merged.push_back(s);
-        }
-      }
-      out.steps = std::move(merged);
-      return out;
-    }
+    const SearchNode cur = nodes[static_cast<size_t>(i)];
+    const TPose2D& at = cur.step.end;
+    if (cur.g > best[key(at)] + 1e-9) continue;  // a cheaper way here was found
+    if (atGoal(at)) return Maneuver{stepsTo(nodes, i), cur.g, expanded};
     ++expanded;
     // The primitives, and a turn on the spot onto the goal's lattice of
     // headings (goal heading plus whole turn_deg steps) for a robot off it:
     // the narrow gap is only passed near the goal's heading.
     cand.assign(prims_.begin(), prims_.end());
-    const double off = std::remainder(cur.pose.phi - goal.phi, a);
+    const double off = std::remainder(at.phi - goal.phi, a);
     if (std::abs(off) > 1e-6) {
       cand.push_back({0, 0, -off});
       cand.push_back({0, 0, off > 0 ? a - off : -a - off});
     }
     for (const Primitive& m : cand) {
-      const TPose2D q = applyPrimitive(cur.pose, m.dir, m.length, m.turn);
+      const TPose2D q = applyPrimitive(at, m.dir, m.length, m.turn);
       if (std::hypot(q.x - start.x, q.y - start.y) > p_.radius) continue;
       if (m.dir < 0 && reverse_ok && !reverse_ok(q)) continue;
       double g = cur.g + (m.dir < 0 ? p_.reverse_cost : 1.0) * m.length +
@@ -258,14 +259,14 @@ std::optional<Maneuver> ManeuverPlanner::plan(const LocalCostmap& map, const TPo
       if (it != best.end() && it->second <= g) continue;
       const double hq = h(q);
       if (!std::isfinite(hq)) continue;  // no way on from there
-      const Sweep sw = sweep(map, cur.pose, cur.clearance, m, floor);
+      const Sweep sw = sweep(map, at, cur.clearance, m, floor);
       if (sw.least < 0) continue;
       const double c = sw.least;
       const double travel = m.length + std::abs(m.turn) * lever_;
       g += p_.clearance_cost * travel * (1 - c / p_.clearance_influence);
       if (it != best.end() && it->second <= g) continue;
       best[kq] = g;
-      nodes.push_back({q, g, sw.end, i, m, m.dir != 0 ? m.dir : cur.dir});
+      nodes.push_back({{m.dir, m.length, m.turn, q}, g, sw.end, i, m.dir != 0 ? m.dir : cur.dir});
       open.push({g + hq, static_cast<int>(nodes.size() - 1)});
     }
   }
