@@ -293,7 +293,6 @@ void Recovery::start(double now, const PlannerInput& in, const std::string& why)
     man_step_ = 0;
     man_done_ = 0;
     man_replans_ = 0;
-    man_finished_ = false;
     man_limit_ = now + maneuverDuration(*man_) * 3 + 2.0;
     return;
   }
@@ -412,8 +411,7 @@ std::optional<Twist> Recovery::maneuverCommand(const PlannerInput& in) {
     man_done_ = 0;
     if (off && man_step_ < man_->steps.size() && !replanManeuver(in)) return std::nullopt;
   }
-  man_finished_ = true;
-  return std::nullopt;
+  return std::nullopt;  // done (maneuverDone)
 }
 
 void Recovery::cutRetraced() {
@@ -486,7 +484,7 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
     std::optional<Twist> c;
     if (now <= man_limit_) c = maneuverCommand(in);
     if (c) return command(*c, "recovery (" + reason_ + "): maneuver");
-    if (man_finished_) {
+    if (man_ && man_step_ >= man_->steps.size()) {  // every step driven
       finish(now);
       return command({0, 0}, "recovery (" + reason_ + "): maneuvered, replanning");
     }

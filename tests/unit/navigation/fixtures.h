@@ -22,6 +22,28 @@ inline RobotParams walkerRobot() {
   return r;
 }
 
+/** The clutter benchmark's robot: 0.51 x 0.43 m, 2 m/s, 4 rad/s, reverses. */
+inline RobotParams fastRobot() {
+  RobotParams r;
+  r.footprint = {{0.255, 0.215}, {-0.255, 0.215}, {-0.255, -0.215}, {0.255, -0.215}};
+  r.v_max = 2.0;
+  r.v_min = -0.5;
+  r.w_max = 4.0;
+  r.acc_v = 2.0;
+  r.acc_w = 4.0;
+  r.safe_distance = 0.1;
+  return r;
+}
+
+/** fastRobot() at the walker's limits (vmax 0.5: 1.57 rad/s) or its own
+ *  (vmax above 1 m/s: 4 rad/s). */
+inline RobotParams fastRobotAt(double vmax) {
+  RobotParams r = fastRobot();
+  r.v_max = vmax;
+  r.w_max = vmax > 1 ? 4.0 : 1.57;
+  return r;
+}
+
 /** Points every 1 cm around a post of radius `r` at (x, y). */
 inline void post(std::vector<TPoint2D>& out, double x, double y, double r) {
   for (int k = 0; k < 48; ++k)

@@ -16,17 +16,7 @@ namespace {
 using test::GapScene;
 
 /** The clutter benchmark's robot at the walker's limits: 0.51 x 0.43 m. */
-RobotParams clutterRobot() {
-  RobotParams r;
-  r.footprint = {{0.255, 0.215}, {-0.255, 0.215}, {-0.255, -0.215}, {0.255, -0.215}};
-  r.v_max = 0.5;
-  r.v_min = -0.5;
-  r.w_max = 1.57;
-  r.acc_v = 2.0;
-  r.acc_w = 4.0;
-  r.safe_distance = 0.1;
-  return r;
-}
+RobotParams clutterRobot() { return test::fastRobotAt(0.5); }
 
 /** Checks every 5 mm of the footprint's corner travel along the step. */
 bool sweepTouches(const LocalCostmap& map, const TPose2D& from, const ManeuverStep& s,

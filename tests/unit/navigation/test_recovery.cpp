@@ -14,27 +14,8 @@
 namespace carenav::navigation {
 namespace {
 
-/** The clutter benchmark's robot: 0.51 x 0.43 m, 2 m/s, 4 rad/s, reverses. */
-RobotParams fastRobot() {
-  RobotParams r;
-  r.footprint = {{0.255, 0.215}, {-0.255, 0.215}, {-0.255, -0.215}, {0.255, -0.215}};
-  r.v_max = 2.0;
-  r.v_min = -0.5;
-  r.w_max = 4.0;
-  r.acc_v = 2.0;
-  r.acc_w = 4.0;
-  r.safe_distance = 0.1;
-  return r;
-}
-
-/** fastRobot() at the walker's limits (vmax 0.5: 1.57 rad/s) or its own
- *  (vmax above 1 m/s: 4 rad/s). */
-RobotParams fastRobotAt(double vmax) {
-  RobotParams r = fastRobot();
-  r.v_max = vmax;
-  r.w_max = vmax > 1 ? 4.0 : 1.57;
-  return r;
-}
+using test::fastRobot;
+using test::fastRobotAt;
 
 /** Obstacle points every 2 cm from a to b. */
 void segment(std::vector<TPoint2D>& out, TPoint2D a, TPoint2D b) {

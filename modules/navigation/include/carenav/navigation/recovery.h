@@ -126,8 +126,8 @@ class Recovery {
   /** The pose the maneuver aims at: on the route, facing its way, where the
    *  footprint touches nothing (the first such from `reach` on). */
   std::optional<TPose2D> maneuverGoal(const PlannerInput& in) const;
-  /** The command of the maneuver's current step; none when it is done or
-   *  its command is not admissible (then man_done_ says which). */
+  /** The command of the maneuver's current step; none when every step is
+   *  driven (man_step_ past the last) or none is admissible any more. */
   std::optional<Twist> maneuverCommand(const PlannerInput& in);
   /** The admissible command of step `s` with `remaining` m or rad of it
    *  left (slowed when the supervisor's rule needs it); none when none is. */
@@ -150,11 +150,10 @@ class Recovery {
   NavigationParams nav_;
   ManeuverPlanner planner_;
   std::optional<Maneuver> man_;
-  size_t man_step_ = 0;   // the step under way
-  double man_done_ = 0;   // m or rad of it done
-  double man_limit_ = 0;  // s, the maneuver is abandoned after this
-  int man_replans_ = 0;   // maneuvers planned again after a step ended off its pose
-  bool man_finished_ = false;
+  size_t man_step_ = 0;        // the step under way
+  double man_done_ = 0;        // m or rad of it done
+  double man_limit_ = 0;       // s, the maneuver is abandoned after this
+  int man_replans_ = 0;        // maneuvers planned again after a step ended off its pose
   std::vector<TPose2D> path_;  // oldest first
   /** The odometry travelled and turned (m, rad) when each pose of path_ was
    *  recorded, and since the start. */
