@@ -132,6 +132,9 @@ const ParamTable<ManeuverParams>& ManeuverParams::table() {
           .real("margin", &P::margin, "m", 0, 1,
                 "every pose of a primitive, and of its continuation this far, keeps this much "
                 "from everything seen (the supervisor's margin for recovery moves)")
+          .real("comfort_margin", &P::comfort_margin, "m", 0, 1,
+                "tried first: a maneuver that keeps this much leaves room for the error of "
+                "driving it (when none does: margin)")
           .real("reverse_cost", &P::reverse_cost, "", 1, 100,
                 "a metre reversed costs this many metres forward")
           .real("switch_cost", &P::switch_cost, "m", 0, 10,
@@ -169,11 +172,11 @@ ManeuverPlanner::ManeuverPlanner(const ManeuverParams& p, const RobotParams& rob
 
 ManeuverPlanner::Sweep ManeuverPlanner::sweep(const LocalCostmap& map, const TPose2D& from,
                                               double from_clearance, const Primitive& m,
-                                              double floor) const {
+                                              double floor, double margin) const {
   // The primitive, then its continuation by `margin` (what the supervisor
   // checks beyond a command's stop); s is the corner's travel along it.
   const double travel = m.length + std::abs(m.turn) * lever_;
-  const double total = travel + p_.margin;
+  const double total = travel + margin;
   Sweep out{p_.clearance_influence, 0};
   double s = 0, c = from_clearance;
   while (s < total) {
@@ -187,7 +190,7 @@ ManeuverPlanner::Sweep ManeuverPlanner::sweep(const LocalCostmap& map, const TPo
     c = k.clearance;
     // In contact (a robot wedged within the padding): the outline's own
     // distance, which must not fall below the start's.
-    if (k.collision) c = floor < p_.margin ? map.outlineClearance(q) : -1;
+    if (k.collision) c = floor < margin ? map.outlineClearance(q) : -1;
     if (c < floor) return {-1, 0};
     if (s <= travel) out.least = std::min(out.least, c);
     if (s == travel) out.end = c;
@@ -198,6 +201,14 @@ ManeuverPlanner::Sweep ManeuverPlanner::sweep(const LocalCostmap& map, const TPo
 std::optional<Maneuver> ManeuverPlanner::plan(const LocalCostmap& map, const TPose2D& start,
                                               const TPose2D& goal,
                                               const ReverseGate& reverse_ok) const {
+  if (p_.comfort_margin > p_.margin)
+    if (auto m = search(map, start, goal, reverse_ok, p_.comfort_margin)) return m;
+  return search(map, start, goal, reverse_ok, p_.margin);
+}
+
+std::optional<Maneuver> ManeuverPlanner::search(const LocalCostmap& map, const TPose2D& start,
+                                                const TPose2D& goal, const ReverseGate& reverse_ok,
+                                                double margin) const {
   const double kres = p_.step / 2, a = mrpt::DEG2RAD(p_.turn_deg);
   const int nh = std::max(1, static_cast<int>(std::lround(2 * M_PI / a)));
   auto key = [&](const TPose2D& q) {
@@ -220,7 +231,7 @@ std::optional<Maneuver> ManeuverPlanner::plan(const LocalCostmap& map, const TPo
   const FootprintCheck c0 = map.check(start, p_.clearance_influence);
   if (c0.outside) return std::nullopt;
   const double floor =
-      c0.collision ? 0.999 * map.outlineClearance(start) : std::min(p_.margin, c0.clearance);
+      c0.collision ? 0.999 * map.outlineClearance(start) : std::min(margin, c0.clearance);
   if (!(floor > 0)) return std::nullopt;
   std::vector<SearchNode> nodes{
       {{0, 0, 0, start}, 0.0, c0.collision ? floor : c0.clearance, -1, 0}};
@@ -259,7 +270,7 @@ std::optional<Maneuver> ManeuverPlanner::plan(const LocalCostmap& map, const TPo
       if (it != best.end() && it->second <= g) continue;
       const double hq = h(q);
       if (!std::isfinite(hq)) continue;  // no way on from there
-      const Sweep sw = sweep(map, at, cur.clearance, m, floor);
+      const Sweep sw = sweep(map, at, cur.clearance, m, floor, margin);
       if (sw.least < 0) continue;
       const double c = sw.least;
       const double travel = m.length + std::abs(m.turn) * lever_;
