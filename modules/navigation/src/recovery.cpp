@@ -46,6 +46,13 @@ const ParamTable<RecoveryParams>& RecoveryParams::table() {
                 "no progress: the route left has not shrunk by progress_distance for this long")
           .real("progress_distance", &P::progress_distance, "m", 0.01, 10,
                 "shrinking of the route left that counts as progress")
+          .real("still_time", &P::still_time, "s", 0, 600,
+                "standing still: moved less than still_distance and turned less than "
+                "still_deg for this long, while not blocked (a planner turning left and right "
+                "on the spot); 0: off")
+          .real("still_distance", &P::still_distance, "m", 0.001, 1,
+                "standing still: moved less than this")
+          .real("still_deg", &P::still_deg, "deg", 1, 180, "standing still: turned less than this")
           .real("backup_distance", &P::backup_distance, "m", 0.05, 5,
                 "backed out along the recent path per attempt (times the attempt, at most 3)")
           .real("backup_speed", &P::backup_speed, "m/s", 0.01, 2,
@@ -276,6 +283,7 @@ void Recovery::newGoal(double now) {
   attempts_ = 0;
   replan_ = false;
   blocked_since_.reset();
+  still_.reset();
 }
 
 void Recovery::start(double now, const PlannerInput& in, const std::string& why) {
@@ -371,7 +379,11 @@ std::optional<Twist> Recovery::stepCommand(const PlannerInput& in, const Maneuve
   } else {
     const double u = std::min(maneuverSpeed(s.dir), remaining / step_dt);
     cmd.v = s.dir * u;
-    cmd.w = u * s.turn / s.length;  // the arc's heading change per metre
+    // The curvature that ends the step at its planned heading: the arc's
+    // own when the robot is on it, and a correction when it is not.
+    const double w_max = maneuverTurnRate();
+    cmd.w = std::clamp(u * angleDiff(s.end.phi, in.pose.phi) / std::max(remaining, 0.05), -w_max,
+                       w_max);
   }
   // The supervisor's rule looks a cycle further at speed than the
   // maneuver's margin: slower, it looks no further than the margin.
@@ -395,7 +407,12 @@ bool Recovery::replanManeuver(const PlannerInput& in) {
 std::optional<Twist> Recovery::maneuverCommand(const PlannerInput& in) {
   while (man_ && man_step_ < man_->steps.size()) {
     const ManeuverStep& s = man_->steps[man_step_];
-    const double remaining = (s.dir == 0 ? std::abs(s.turn) : s.length) - man_done_;
+    // A turn ends at its planned heading, not after its angle (one that
+    // overshot leaves the next step no error to carry); by the angle turned
+    // while more than a right angle is left (a heading is ambiguous beyond).
+    double remaining = (s.dir == 0 ? std::abs(s.turn) : s.length) - man_done_;
+    if (s.dir == 0 && remaining <= M_PI / 2)
+      remaining = std::copysign(1.0, s.turn) * angleDiff(s.end.phi, in.pose.phi);
     if (remaining > (s.dir == 0 ? 0.02 : 0.01)) {
       if (auto c = stepCommand(in, s, remaining)) return c;
       // Not admissible from where the robot is, with what it sees now:
@@ -426,6 +443,16 @@ void Recovery::finish(double now) {
   replan_ = true;
   best_t_ = now;  // the planner gets a fresh window
   blocked_since_.reset();
+  still_.reset();
+}
+
+bool Recovery::standingStill(double now, const TPose2D& pose, bool at_goal) {
+  const bool moved =
+      still_ &&
+      (std::hypot(pose.x - still_->first.x, pose.y - still_->first.y) > p_.still_distance ||
+       std::abs(angleDiff(pose.phi, still_->first.phi)) > mrpt::DEG2RAD(p_.still_deg));
+  if (!still_ || moved || at_goal) still_ = std::make_pair(pose, now);
+  return p_.still_time > 0 && now - still_->second >= p_.still_time;
 }
 
 std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
@@ -453,6 +480,7 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
     have_best_ = true;
   }
   if (phase_ == Phase::Idle) {
+    const bool still = standingStill(now, in.pose, route_left < nav_.goal_tolerance);
     if (plan.ok && plan.status == PlanStatus::GoalReached) return std::nullopt;
     if (blocked) {
       if (!blocked_since_) blocked_since_ = now;
@@ -464,6 +492,8 @@ std::optional<PlannerOutput> Recovery::step(double now, const PlannerInput& in,
       why = "boxed in";
     else if (now - best_t_ >= p_.progress_time)
       why = "no progress";
+    else if (still)
+      why = "standing still";
     if (why.empty()) return std::nullopt;
     if (attempts_ >= p_.max_attempts) {
       phase_ = Phase::GaveUp;

@@ -208,6 +208,7 @@ TEST(Recovery, NoProgressIsSeenThroughARouteReplannedEvery2Seconds) {
   NavigationParams nav;
   const RobotParams r = fastRobot();
   RecoveryParams rp;
+  rp.still_time = 0;  // the pose below never changes: standing still is tested on its own
   Recovery rec(rp, r, nav);
   LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
   map.build({0, 0}, {});
@@ -236,6 +237,50 @@ TEST(Recovery, NoProgressIsSeenThroughARouteReplannedEvery2Seconds) {
     if (k > 0 && k % 20 == 0) moving.routeChanged(t);
     const double left = 5.0 - 0.1 * t + ((k / 20) % 2 ? 0.2 : -0.2);
     EXPECT_FALSE(moving.step(t, in, turning, false, left)) << "t " << t;
+  }
+}
+
+TEST(Recovery, AStandStillTurningLeftAndRightStartsARecoveryAfterStillTime) {
+  // goal-dwa at a post turned left and right on the spot for 10 s (never
+  // blocked: it always had a command) before a no-progress recovery began.
+  // A robot that neither moves still_distance nor turns still_deg for
+  // still_time recovers then; one that turns on towards its route, or
+  // creeps along it, or stands at its goal, does not.
+  NavigationParams nav;
+  const RobotParams r = fastRobot();
+  RecoveryParams rp;
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, {});
+  PlannerOutput plan;
+  plan.ok = true;
+  plan.cmd = {0, 0.3};
+  struct Case {
+    const char* what;
+    double w, v, left;  // rad/s turned (sign flips every 0.5 s when dithering), m/s driven
+    bool dither, recovers;
+  };
+  for (const Case& c :
+       {Case{"dithering", 0.3, 0, 5, true, true}, Case{"turning on", 0.3, 0, 5, false, false},
+        Case{"creeping", 0, 0.03, 5, false, false},
+        Case{"at the goal", 0.3, 0, 0.1, true, false}}) {
+    SCOPED_TRACE(c.what);
+    Recovery rec(rp, r, nav);
+    rec.newGoal(0);
+    PlannerInput in;
+    in.map = &map;
+    in.pose = {0, 0, 0};
+    in.path = {{0, 0}, {5, 0}};
+    std::optional<double> started;
+    for (double t = 0; t < 8 && !started; t += 0.1) {
+      const int k = static_cast<int>(std::lround(t * 10));
+      const double w = c.dither && (k / 5) % 2 ? -c.w : c.w;
+      in.pose = move(in.pose, {c.v, w}, 0.1);
+      // the route left shrinks only by what was driven (never by 0.3 m here)
+      if (rec.step(t, in, plan, false, c.left - in.pose.x)) started = t;
+    }
+    EXPECT_EQ(started.has_value(), c.recovers);
+    if (started) EXPECT_NEAR(*started, rp.still_time, 0.25);
+    if (started) EXPECT_NE(rec.phase(), Recovery::Phase::Idle);
   }
 }
 
@@ -705,9 +750,13 @@ TEST(Recovery, BacksOutOfAWedgeUntilItCanTurnAndFacesTheRouteBeforeReplanning) {
  *  cycles) until it asks for a replan; every command passes the
  *  supervisor's rule and nothing is touched. Returns the end pose and
  *  whether a maneuver step was among the commands. */
+/** Recovers from `start`, every command driven for a cycle by a robot that
+ *  turns `turn_gain` times what it is told (slip, a slow controller); the
+ *  end pose and whether a maneuver was driven. */
 std::pair<TPose2D, bool> recoverFrom(Recovery& rec, const LocalCostmap& map, const TPose2D& start,
                                      const std::vector<TPoint2D>& route, const RobotParams& r,
-                                     const NavigationParams& nav, double margin) {
+                                     const NavigationParams& nav, double margin,
+                                     double turn_gain = 1.0) {
   PlannerInput in;
   in.map = &map;
   in.pose = start;
@@ -724,7 +773,7 @@ std::pair<TPose2D, bool> recoverFrom(Recovery& rec, const LocalCostmap& map, con
     EXPECT_TRUE(o->ok) << o->note;
     maneuvered |= o->note.find("maneuver") != std::string::npos;
     EXPECT_GE(brakingScale(map, in.pose, o->cmd, r, nav.sim_step, margin), 1.0) << o->note;
-    in.pose = move(in.pose, o->cmd, 0.1);
+    in.pose = move(in.pose, {o->cmd.v, o->cmd.w * turn_gain}, 0.1);
     EXPECT_FALSE(map.check(in.pose).collision) << "t " << t << " " << o->note;
     rec.recordPose(in.pose);
   }
@@ -768,6 +817,36 @@ TEST(Recovery, ManeuversThroughTheGapMouthItIsWedgedInWhereBackingOutStaysBefore
         EXPECT_LT(end.x, g.gx) << "skew " << skew;
       }
     }
+  }
+}
+
+TEST(Recovery, AManeuverDrivenByARobotThatTurnsTooFarOrTooLittleStillEndsOnItsWay) {
+  // A maneuver's steps end at their planned poses (heading fed back), not
+  // after their angle and length: a robot that turns half as much again, or 30 % less, than
+  // told (slip, a slow controller) ended its steps more and more off
+  // and the maneuver was planned again and again, or not finished.
+  const NavigationParams nav;
+  const RobotParams r = fastRobotAt(0.5);
+  const test::GapScene g(0.55);
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, g.obs);
+  const std::vector<TPoint2D> route{{-1.5, 0}, {0, 0}, {3, 0}};
+  const double skew = 0.8;
+  TPose2D p{g.gx - 0.9 * std::cos(skew), -0.1 - 0.9 * std::sin(skew), skew};
+  std::vector<TPose2D> came;
+  while (map.check(p, 0.1).clearance >= 0.06 && !map.check(p, 0.1).collision) {
+    came.push_back(p);
+    p = integrateArc(p, 0.005, 0, 1.0);
+  }
+  for (const double gain : {0.7, 1.5}) {
+    RecoveryParams rp;
+    ManeuverParams mp;
+    Recovery rec(rp, r, nav, mp);
+    for (const auto& q : came) rec.recordPose(q);
+    const auto [end, maneuvered] = recoverFrom(rec, map, p, route, r, nav, rp.backup_margin, gain);
+    EXPECT_TRUE(maneuvered) << gain;
+    EXPECT_GT(end.x, g.gx + 0.3) << "turn gain " << gain;
+    EXPECT_LT(std::abs(end.y), mp.goal_radius + 0.1) << "turn gain " << gain;
   }
 }
 

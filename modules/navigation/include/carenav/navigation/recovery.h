@@ -28,8 +28,15 @@ struct RecoveryParams {
   double stuck_time = 1.0;         ///< s, blocked (no admissible trajectory, stopped) this long
   double progress_time = 10.0;     ///< s, ... or the route left has not shrunk for this long
   double progress_distance = 0.3;  ///< m, ... by this much
-  double backup_distance = 0.4;    ///< m, backed out along the recent path per attempt
-  double backup_speed = 0.2;       ///< m/s, reversing speed (at most the robot's -v_min)
+  /** s, ... or the robot has stood still this long: moved less than
+   *  still_distance and turned less than still_deg (a planner turning left
+   *  and right on the spot, never blocked, waited out the whole
+   *  progress_time); 0: off. */
+  double still_time = 3.0;
+  double still_distance = 0.05;  ///< m
+  double still_deg = 30;         ///< deg
+  double backup_distance = 0.4;  ///< m, backed out along the recent path per attempt
+  double backup_speed = 0.2;     ///< m/s, reversing speed (at most the robot's -v_min)
   double backup_margin = 0.03;  ///< m, the supervisor's margin for these crawls (not safe_distance)
   double path_corridor = 0.1;   ///< m, reversing stays this close to the recorded path
   double spin_deg = 90;         ///< deg, most a spin turns per attempt
@@ -172,6 +179,10 @@ class Recovery {
   std::optional<double> blocked_since_;
   double best_left_ = 0, best_t_ = 0;
   bool have_best_ = false;
+  std::optional<std::pair<TPose2D, double>> still_;  // where and when the robot stood still from
+  /** Whether the robot has stood still for still_time (and starts the
+   *  window again when it moved or turned, or is at the goal). */
+  bool standingStill(double now, const TPose2D& pose, bool at_goal);
   bool rebase_ = false;   // a new route: best_left_ is measured on it from the next cycle
   double last_left_ = 0;  // the route left at the last cycle
   // current recovery
