@@ -29,9 +29,9 @@ struct ManeuverParams {
   double step = 0.1;          ///< m, length of a straight or arc primitive
   double turn_deg = 15;       ///< deg, heading change of an arc and of a turn on the spot
   double margin = 0.03;       ///< m, kept by every primitive and its continuation this far
-  /** m, tried first: a maneuver keeping this much leaves room for the error
-   *  of driving it (a turn that overshoots, a pose known to a few cm); when
-   *  none does, `margin`. */
+  /** m, tried first (with a quarter of max_nodes): a maneuver keeping this
+   *  much leaves room for the error of driving it (a turn that overshoots,
+   *  a pose known to a few cm); when none is found, `margin`. */
   double comfort_margin = 0.06;
   double reverse_cost = 2.0;    ///< a metre reversed costs this many driven forward
   double switch_cost = 0.3;     ///< m, extra cost of changing between forward and reverse
@@ -71,9 +71,10 @@ class ManeuverPlanner {
   /** The cheapest maneuver from `start` to within goal_radius of `goal`
    *  facing goal.phi within goal_deg, every primitive's footprint (and its
    *  continuation by `margin`) `margin` from everything on `map` (a start
-   *  nearer than that: as near as the start), comfort_margin when a
-   *  maneuver keeps that much; none when the search finds none within
-   *  max_nodes expansions. A robot with v_min = 0 never reverses. */
+   *  nearer than that: as near as the start), comfort_margin when a first
+   *  search of max_nodes / 4 expansions finds a maneuver keeping that much;
+   *  none when the search finds none within max_nodes expansions. A robot
+   *  with v_min = 0 never reverses. */
   std::optional<Maneuver> plan(const LocalCostmap& map, const TPose2D& start, const TPose2D& goal,
                                const ReverseGate& reverse_ok = {}) const;
   const ManeuverParams& params() const { return p_; }
@@ -92,9 +93,9 @@ class ManeuverPlanner {
   };
   Sweep sweep(const LocalCostmap& map, const TPose2D& from, double from_clearance,
               const Primitive& m, double floor, double margin) const;
-  /** plan() keeping `margin`. */
+  /** plan() keeping `margin`, expanding at most `max_nodes` primitives. */
   std::optional<Maneuver> search(const LocalCostmap& map, const TPose2D& start, const TPose2D& goal,
-                                 const ReverseGate& reverse_ok, double margin) const;
+                                 const ReverseGate& reverse_ok, double margin, int max_nodes) const;
   ManeuverParams p_;
   RobotParams r_;
   std::vector<Primitive> prims_;
