@@ -6,9 +6,9 @@
 //                  --start x,y,deg   (a real robot)
 #include <carenav/common/errors.h>
 #include <carenav/common/profile.h>
+#include <carenav/navigation/local_planner.h>
 #include <carenav/runtime/bridge.h>
 #include <carenav/runtime/intent.h>
-#include <carenav/navigation/local_planner.h>
 #include <carenav/runtime/suite.h>
 
 #include <atomic>
@@ -136,6 +136,11 @@ std::vector<navigation::RunMetrics> runScenarios(const NavigateArgs& a, const Gl
       !a.scenario.empty() ? std::vector<std::string>{a.scenario} : navigation::suiteFiles(a.suite);
   std::vector<navigation::Scenario> scenarios;
   for (const auto& f : files) scenarios.push_back(navigation::readScenario(f));
+  if (!a.start.empty()) {  // one scenario from elsewhere (it was ignored before)
+    if (a.scenario.empty())
+      throw InputError("navigate: --start goes with one --scenario, not with a --suite");
+    scenarios.front().start = parsePose(a.start, "--start");
+  }
   navigation::RunOptions base = runOptions(a, g);
   base.out_dir = a.out;
   base.speed = a.speed.value_or(0.0);
@@ -212,7 +217,9 @@ void addOptions(CLI::App* cmd, NavigateArgs& a) {
                        "Simulator world YAML (docs/simulate.md); default "
                        "maps/worlds/apartment.yaml of carenav's data folder (share/carenav, or "
                        "$CARENAV_DATA_DIR)");
-  live->add_option("--start", a.start, "Start pose x,y,deg (simulator, or on --map with --bridge)");
+  live->add_option("--start", a.start,
+                   "Start pose x,y,deg (simulator, a --scenario's instead of its own, or on --map "
+                   "with --bridge)");
   live->add_option("--speed", a.speed,
                    "Simulated seconds per wall second: 1 real time (the live default), 0 as fast "
                    "as possible (the scenario default)")

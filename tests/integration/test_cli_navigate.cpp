@@ -96,6 +96,22 @@ TEST(CliNavigate, WalkerStopsBeforeStairsGoingDown) {
   EXPECT_EQ(slurp(out / "walker-stairs-down" / "run.png").substr(1, 3), "PNG");
 }
 
+TEST(CliNavigate, StartMovesAScenarioAndIsRefusedWithASuite) {
+  // --start was ignored with --scenario: the run began at the file's start.
+  const auto out = scratch() / "nav_start";
+  fs::remove_all(out);
+  const NavRun run =
+      navigate("walker-corridor-free.yaml", {"--start", "2.5,1.4,10", "--out", out.string()});
+  ASSERT_EQ(run.r.code, 0) << run.r.err;
+  const auto rows = readCsv(out / "walker-corridor-free" / "navlog.csv");
+  ASSERT_GT(rows.size(), 2u);
+  EXPECT_NEAR(std::stod(rows[1][1]), 2.5, 0.05);  // truth_x of the first cycle
+  EXPECT_NEAR(std::stod(rows[1][2]), 1.4, 0.05);
+  const auto suite = carenav({"-q", "navigate", "--suite", kScenarios, "--start", "2,1,0"});
+  EXPECT_EQ(suite.code, 2);
+  EXPECT_NE(suite.err.find("--start goes with one --scenario"), std::string::npos) << suite.err;
+}
+
 // The walker starts 0.4-0.65 m from the stair edge (its front 0.15-0.4 m
 // from it): the edge lies in the camera's blind zone, never seen; only the
 // treads below are in view. Before, RRT-GPD took a tread for the floor, the
