@@ -780,6 +780,22 @@ std::pair<TPose2D, bool> recoverFrom(Recovery& rec, const LocalCostmap& map, con
   return {in.pose, maneuvered};
 }
 
+/** The poses of a robot driven up to the gap's mouth along a line skewed by
+ *  `skew`, until its front is within 6 cm of a post; the last one is where
+ *  it stands. */
+std::vector<TPose2D> driveIntoTheMouth(const LocalCostmap& map, const test::GapScene& g,
+                                       double skew) {
+  const double y0 = skew > 0 ? -0.1 : 0.1;
+  std::vector<TPose2D> came;
+  TPose2D p{g.gx - 0.9 * std::cos(skew), y0 - 0.9 * std::sin(skew), skew};
+  while (map.check(p, 0.1).clearance >= 0.06 && !map.check(p, 0.1).collision) {
+    came.push_back(p);
+    p = integrateArc(p, 0.005, 0, 1.0);
+  }
+  came.push_back(p);
+  return came;
+}
+
 TEST(Recovery, ManeuversThroughTheGapMouthItIsWedgedInWhereBackingOutStaysBefore) {
   // Skewed at a 0.55 m gap's mouth (the robot is 0.43 m wide), its front
   // 3-6 cm from a post: a footprint maneuver (a step back, turns, and on
@@ -792,14 +808,9 @@ TEST(Recovery, ManeuversThroughTheGapMouthItIsWedgedInWhereBackingOutStaysBefore
   map.build({0, 0}, g.obs);
   const std::vector<TPoint2D> route{{-1.5, 0}, {0, 0}, {3, 0}};
   for (const double skew : {0.5, -0.6, 0.8}) {
-    // Driven up along a skewed line until the front is within 6 cm of a post.
-    const double y0 = skew > 0 ? -0.1 : 0.1;
-    std::vector<TPose2D> came;
-    TPose2D p{g.gx - 0.9 * std::cos(skew), y0 - 0.9 * std::sin(skew), skew};
-    while (map.check(p, 0.1).clearance >= 0.06 && !map.check(p, 0.1).collision) {
-      came.push_back(p);
-      p = integrateArc(p, 0.005, 0, 1.0);
-    }
+    std::vector<TPose2D> came = driveIntoTheMouth(map, g, skew);
+    const TPose2D p = came.back();
+    came.pop_back();
     ASSERT_FALSE(map.check(p).collision) << skew;
     RecoveryParams rp;
     for (const bool maneuvers : {true, false}) {
@@ -831,13 +842,9 @@ TEST(Recovery, AManeuverDrivenByARobotThatTurnsTooFarOrTooLittleStillEndsOnItsWa
   LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
   map.build({0, 0}, g.obs);
   const std::vector<TPoint2D> route{{-1.5, 0}, {0, 0}, {3, 0}};
-  const double skew = 0.8;
-  TPose2D p{g.gx - 0.9 * std::cos(skew), -0.1 - 0.9 * std::sin(skew), skew};
-  std::vector<TPose2D> came;
-  while (map.check(p, 0.1).clearance >= 0.06 && !map.check(p, 0.1).collision) {
-    came.push_back(p);
-    p = integrateArc(p, 0.005, 0, 1.0);
-  }
+  std::vector<TPose2D> came = driveIntoTheMouth(map, g, 0.8);
+  const TPose2D p = came.back();
+  came.pop_back();
   for (const double gain : {0.7, 1.5}) {
     RecoveryParams rp;
     ManeuverParams mp;
