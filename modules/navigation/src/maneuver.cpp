@@ -20,6 +20,8 @@ namespace {
  *  than the floor between two checks. */
 constexpr double kMinSpacing = 0.01;
 
+}  // namespace
+
 /** Distances to go ignoring the heading but not the obstacles ([Dolgov10]'s
  *  "holonomic with obstacles" heuristic): a Dijkstra over the cost map's
  *  cells from the goal, through cells whose distance to the nearest
@@ -78,6 +80,8 @@ class DistanceToGoal {
   TPoint2D o_;
   std::vector<double> d_;
 };
+
+namespace {
 
 /** A pose the search reached: the step that led there (its `end` the
  *  pose), the cost so far, the clearance there (capped), the node before
@@ -201,17 +205,19 @@ ManeuverPlanner::Sweep ManeuverPlanner::sweep(const LocalCostmap& map, const TPo
 std::optional<Maneuver> ManeuverPlanner::plan(const LocalCostmap& map, const TPose2D& start,
                                               const TPose2D& goal,
                                               const ReverseGate& reverse_ok) const {
+  const DistanceToGoal togo(map, {goal.x, goal.y}, {start.x, start.y}, p_.radius);
   // The comfortable search gets a quarter of the expansions: where none
   // keeps that much it fails after its whole budget, before the second.
   if (p_.comfort_margin > p_.margin)
-    if (auto m = search(map, start, goal, reverse_ok, p_.comfort_margin, p_.max_nodes / 4))
+    if (auto m = search(map, start, goal, togo, reverse_ok, p_.comfort_margin, p_.max_nodes / 4))
       return m;
-  return search(map, start, goal, reverse_ok, p_.margin, p_.max_nodes);
+  return search(map, start, goal, togo, reverse_ok, p_.margin, p_.max_nodes);
 }
 
 std::optional<Maneuver> ManeuverPlanner::search(const LocalCostmap& map, const TPose2D& start,
-                                                const TPose2D& goal, const ReverseGate& reverse_ok,
-                                                double margin, int max_nodes) const {
+                                                const TPose2D& goal, const DistanceToGoal& togo,
+                                                const ReverseGate& reverse_ok, double margin,
+                                                int max_nodes) const {
   const double kres = p_.step / 2, a = mrpt::DEG2RAD(p_.turn_deg);
   const int nh = std::max(1, static_cast<int>(std::lround(2 * M_PI / a)));
   auto key = [&](const TPose2D& q) {
@@ -220,7 +226,6 @@ std::optional<Maneuver> ManeuverPlanner::search(const LocalCostmap& map, const T
     const int64_t ih = ((std::lround(q.phi / (2 * M_PI) * nh) % nh) + nh) % nh;
     return (ix << 40) | (iy << 20) | ih;
   };
-  const DistanceToGoal togo(map, {goal.x, goal.y}, {start.x, start.y}, p_.radius);
   auto h = [&](const TPose2D& q) {
     return p_.greed * std::max(0.0, togo.at(q.x, q.y) - p_.goal_radius);
   };

@@ -59,6 +59,8 @@ struct Maneuver {
   size_t expanded = 0;  ///< primitives expanded by the search
 };
 
+class DistanceToGoal;  // the search's heuristic (maneuver.cpp)
+
 /** The search. Poses are in the map's frame. */
 class ManeuverPlanner {
  public:
@@ -93,9 +95,11 @@ class ManeuverPlanner {
   };
   Sweep sweep(const LocalCostmap& map, const TPose2D& from, double from_clearance,
               const Primitive& m, double floor, double margin) const;
-  /** plan() keeping `margin`, expanding at most `max_nodes` primitives. */
+  /** plan() keeping `margin`, expanding at most `max_nodes` primitives,
+   *  guided by `togo` (computed once for both searches). */
   std::optional<Maneuver> search(const LocalCostmap& map, const TPose2D& start, const TPose2D& goal,
-                                 const ReverseGate& reverse_ok, double margin, int max_nodes) const;
+                                 const DistanceToGoal& togo, const ReverseGate& reverse_ok,
+                                 double margin, int max_nodes) const;
   ManeuverParams p_;
   RobotParams r_;
   std::vector<Primitive> prims_;
