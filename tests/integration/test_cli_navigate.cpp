@@ -138,6 +138,30 @@ TEST(CliNavigate, WalkerStartedAtAStairEdgeItCannotSeeStaysBeforeIt) {
   }
 }
 
+// A forbidden region is entered when any part of the robot is in it: a
+// walker standing with its front (0.25 m ahead of the axle) over a strip
+// 0.1-0.2 m ahead of its centre has entered it (before, only the centre
+// counted: a walker with its front wheels over a stair edge succeeded).
+TEST(CliNavigate, AForbiddenRegionIsEnteredByAnyPartOfTheFootprint) {
+  for (const double strip : {0.1, 0.3}) {  // under the front, then just ahead of it
+    const auto dir = scratch() / ("nav_forbidden_" + std::to_string(strip));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const double x0 = 1.0 + strip, x1 = x0 + 0.1;
+    std::ofstream(dir / "strip.yaml")
+        << "format: 1\nworld: " << kSrc << "/maps/worlds/nav/corridor_boxes.yaml\nprofile: " << kSrc
+        << "/ini/isr-aiwalker.ini\nstart: [1.0, 1.5, 0]\nintent:\n  - [0, 0, 0]\n"
+        << "duration: 2\nforbidden:\n  - [[" << x0 << ", 0], [" << x1 << ", 0], [" << x1
+        << ", 3], [" << x0 << ", 3]]\nend: true\n";
+    const RunResult r = carenav({"-q", "navigate", "--scenario", (dir / "strip.yaml").string(),
+                                 "--json", "--out", (dir / "out").string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const bool under = strip < 0.25;
+    EXPECT_EQ(r.out.find("entered a forbidden region") != std::string::npos, under) << r.out;
+    EXPECT_EQ(jsonTrue(r.out, "success"), !under) << strip << r.out;
+  }
+}
+
 // A free corridor: the user's command passes (intent fidelity ~0) and a
 // closed door is refused even while the user keeps pushing towards it.
 TEST(CliNavigate, WalkerFollowsAFreePathAndRefusesAClosedDoor) {

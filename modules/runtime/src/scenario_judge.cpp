@@ -42,6 +42,20 @@ double TruthClearance::at(const sim::Pose2& p, const std::vector<sim::PersonNow>
   return std::max(0.0, best - w_.resolution() / 2);
 }
 
+bool TruthClearance::enters(const sim::Pose2& p, const std::vector<TPoint2D>& poly) const {
+  const double c = std::cos(p.yaw), s = std::sin(p.yaw);
+  if (places::pointInPolygon(poly, p.x, p.y)) return true;
+  for (const auto& b : fp_.boundary)
+    if (places::pointInPolygon(poly, p.x + c * b.x - s * b.y, p.y + s * b.x + c * b.y)) return true;
+  std::vector<TPoint2D> outline;  // the footprint in the robot frame
+  for (const auto& q : fp_.polygon) outline.push_back({q.x, q.y});
+  for (const auto& q : poly) {
+    const double dx = q.x - p.x, dy = q.y - p.y;
+    if (places::pointInPolygon(outline, c * dx + s * dy, -s * dx + c * dy)) return true;
+  }
+  return false;
+}
+
 Truth simulatorTruth(const sim::Simulator& sim, const sim::World& world,
                      const TruthClearance& clearance, const Scenario& sc, double t) {
   const sim::Pose2 p = sim.groundTruth();
@@ -51,7 +65,7 @@ Truth simulatorTruth(const sim::Simulator& sim, const sim::World& world,
   tr.collided = sim.collided();
   tr.collisions = sim.collisions();
   for (const auto& poly : sc.forbidden)
-    if (places::pointInPolygon(poly, p.x, p.y)) tr.forbidden = true;
+    if (clearance.enters(p, poly)) tr.forbidden = true;
   tr.off_map = !world.inside(world.cellX(p.x), world.cellY(p.y));
   return tr;
 }

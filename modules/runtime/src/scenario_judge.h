@@ -20,6 +20,11 @@ class TruthClearance {
  public:
   TruthClearance(const sim::World& w, const RobotParams& robot, double step);
   double at(const sim::Pose2& p, const std::vector<sim::PersonNow>& people) const;
+  /** Whether any part of the footprint at `p` lies in the polygon: a
+   *  sample of its outline inside it, or a corner of it inside the
+   *  footprint (a walker whose front wheels are over a stair edge has
+   *  entered the stairs, wherever its centre is). */
+  bool enters(const sim::Pose2& p, const std::vector<TPoint2D>& poly) const;
 
  private:
   const sim::World& w_;

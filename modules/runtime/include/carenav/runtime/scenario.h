@@ -59,7 +59,7 @@ struct Scenario {
   double user_speed = 0.25;
   double duration = 60;                              ///< s, simulated
   std::optional<std::pair<TPoint2D, double>> reach;  ///< success needs the centre within r
-  std::vector<std::vector<TPoint2D>> forbidden;      ///< the centre must never enter these
+  std::vector<std::vector<TPoint2D>> forbidden;      ///< no part of the footprint may enter these
   bool path_exists = true;  ///< goal scenarios: the world has a route to the goal
   int seed = 1;
   /** The user's (v, w) at time t for a robot heading `yaw`; nullopt before
