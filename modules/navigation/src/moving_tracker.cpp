@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 namespace carenav::navigation {
@@ -34,6 +35,23 @@ std::vector<std::vector<size_t>> clusterPoints(const std::vector<TPoint2D>& pts,
   return out;
 }
 
+size_t distinctCells(const std::vector<TPoint2D>& pts, const std::vector<size_t>& idx,
+                     double cell) {
+  std::vector<std::pair<int64_t, int64_t>> cells;
+  cells.reserve(idx.size());
+  for (size_t i : idx)
+    cells.emplace_back(static_cast<int64_t>(std::floor(pts[i].x / cell)),
+                       static_cast<int64_t>(std::floor(pts[i].y / cell)));
+  std::sort(cells.begin(), cells.end());
+  return static_cast<size_t>(std::unique(cells.begin(), cells.end()) - cells.begin());
+}
+
+double travelled(const MovingTrack& k) {
+  if (k.history.size() < 2) return 0;
+  const TPoint2D &a = k.history.front().second, &b = k.history.back().second;
+  return std::hypot(b.x - a.x, b.y - a.y);
+}
+
 void MovingTracker::update(const std::vector<TPoint2D>& moved_in, double t) {
   // drop tracks not seen for a while
   tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
@@ -42,6 +60,7 @@ void MovingTracker::update(const std::vector<TPoint2D>& moved_in, double t) {
   const auto clusters = clusterPoints(moved_in, p_.link);
   std::vector<MovingTrack> seen;
   std::vector<char> used(tracks_.size(), 0);
+  bodies_.clear();
   for (const auto& c : clusters) {
     MovingTrack m;
     for (size_t i : c) m.centroid.x += moved_in[i].x, m.centroid.y += moved_in[i].y;
@@ -68,6 +87,10 @@ void MovingTracker::update(const std::vector<TPoint2D>& moved_in, double t) {
       const double gate = p_.gate + (dt > p_.fresh ? p_.hidden_speed * (dt - p_.fresh) : 0.0);
       if (d < gate && d < best_d) best_d = d, best = k;
     }
+    if (best == tracks_.size() &&
+        distinctCells(moved_in, c, p_.cell) < static_cast<size_t>(p_.min_cells))
+      continue;  // no body: an edge cell flickering, not a person stepping in
+    for (size_t i : c) bodies_.push_back(moved_in[i]);
     if (best < tracks_.size()) {
       used[best] = 1;
       const MovingTrack& prev = tracks_[best];
@@ -95,7 +118,7 @@ void MovingTracker::update(const std::vector<TPoint2D>& moved_in, double t) {
         const double s = std::hypot(v.x, v.y);
         if (s > p_.max_speed) v.x *= p_.max_speed / s, v.y *= p_.max_speed / s;
         m.velocity = v;
-        if (std::hypot(v.x, v.y) >= p_.min_speed && m.history.size() >= 3) m.walked = true;
+        if (std::hypot(v.x, v.y) >= p_.min_speed && travelled(m) >= p_.min_travel) m.walked = true;
       }
     }
     seen.push_back(m);
@@ -131,7 +154,7 @@ std::vector<TPoint2D> MovingTracker::predictedPath(double horizon, double step,
     if (k.history.size() < 3) continue;         // two displacements before a velocity is trusted
     if (k.seen < latest_ - p_.fresh) continue;  // out of sight: hiddenRegions
     const double s = std::hypot(k.velocity.x, k.velocity.y);
-    if (s < p_.min_speed) continue;
+    if (s < p_.min_speed || travelled(k) < p_.min_travel) continue;
     const double len = s * horizon;
     const double ux = k.velocity.x / s, uy = k.velocity.y / s;
     const int n = static_cast<int>(std::ceil(len / step));

@@ -131,8 +131,9 @@ const ParamTable<PeopleParams>& PeopleParams::table() {
                 "of a thin post from one side and hit them from another: static, not moving); "
                 "0: off (at 2-10 s a person crossing the robot's way is no longer seen moving)")
           .real("predict_horizon", &P::predict_horizon, "s", 0, 10,
-                "moving obstacles are tracked and swept along their estimated velocity this far "
-                "ahead (a person walking towards the robot blocks the lane it walks in); 0: off")
+                "tracked moving obstacles are swept along their estimated velocity this far "
+                "ahead (a person walking towards the robot blocks the lane it walks in); 0: no "
+                "lanes, no hidden regions")
           .real("route_predict_horizon", &P::route_predict_horizon, "s", 0, 60,
                 "replanned routes keep out of a tracked person's lane this far ahead (a robot "
                 "meeting "
@@ -147,7 +148,11 @@ const ParamTable<PeopleParams>& PeopleParams::table() {
                    "depth: at least this many neighbouring cells must move in together (a body "
                    "stepping in, not a flickering edge)")
           .real("track_gate", &P::track_gate, "m", 0.05, 5,
-                "a moving cluster continues the track whose predicted centroid is this close");
+                "a moving cluster continues the track whose predicted centroid is this close")
+          .integer("track_min_cells", &P::track_min_cells, "", 1, 1000,
+                   "a moving cluster must cover this many cells to start a track (a body moving "
+                   "in, not the edge cell of a post that grazing rays saw free); smaller ones "
+                   "continue a track, or stay plain obstacles");
   return t;
 }
 

@@ -25,6 +25,8 @@ Navigator::Navigator(const NavigationParams& p, const RobotParams& robot)
       tracker_([&] {
         MovingTrackerParams t;
         t.gate = p.track_gate;
+        t.min_cells = p.track_min_cells;
+        t.cell = p.resolution;
         return t;
       }()),
       recovery_(RecoveryParams{}, robot, p) {}
@@ -296,12 +298,13 @@ Navigator::Cycle Navigator::cycle(double now) {
     for (const auto& c : clusterPoints(depth_moving, 1.5 * p_.resolution))
       if (c.size() >= static_cast<size_t>(p_.track_depth_min_cells))
         for (size_t i : c) moving_.push_back(depth_moving[i]);
-    // Tracked, the moving obstacles also block where they are going.
+    // Only bodies are moving obstacles (MovingTrackerParams::min_cells);
+    // tracked, they also block where they are going.
+    tracker_.update(moving_, now);
+    moving_ = tracker_.bodies();
     predicted_.clear();
-    if (p_.predict_horizon > 0) {
-      tracker_.update(moving_, now);
+    if (p_.predict_horizon > 0)
       predicted_ = tracker_.predictedPath(p_.predict_horizon, p_.resolution);
-    }
     std::vector<TPoint2D> all = moving_;
     all.insert(all.end(), predicted_.begin(), predicted_.end());
     // People who walked out of sight nearby may step back in.

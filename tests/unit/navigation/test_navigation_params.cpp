@@ -76,7 +76,8 @@ TEST(NavigationParams, EveryKeyHasOneSectionAndTheOldOnesAreRenamed) {
   add(LocalMapParams::table().specs());
   add(PeopleParams::table().specs());
   add(SafetyParams::table().specs());
-  EXPECT_EQ(n, 48u);  // the 46 keys of the previous [navigation], static_memory, align_deg
+  EXPECT_EQ(n, 49u);  // the 46 keys of the previous [navigation], static_memory, align_deg,
+                      // track_min_cells
   EXPECT_EQ(keys.size(), n) << "a key in two sections";
   size_t renamed = 0;
   for (const auto& r : ProfileSchemas::instance().renames())
@@ -110,7 +111,7 @@ TEST(NavigationParams, OldKeysGiveExactlyTheParamsOfTheNewSections) {
   EXPECT_NE(a.obstacle_persistence, d.obstacle_persistence);
   EXPECT_NE(a.track_depth_min_cells, d.track_depth_min_cells);
   EXPECT_NE(a.intent_timeout, d.intent_timeout);
-  EXPECT_EQ(old_p.renamedKeys().size(), 33u);
+  EXPECT_EQ(old_p.renamedKeys().size(), 34u);
   EXPECT_TRUE(new_p.renamedKeys().empty());
 }
 

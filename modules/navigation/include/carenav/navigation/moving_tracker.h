@@ -31,6 +31,20 @@ struct MovingTrackerParams {
    *  it is not tracked, so it neither sweeps a lane nor leaves a hidden
    *  region the size of its spread. A person's body fits well within. */
   double max_radius = 0.6;
+  /** Cells (`cell` metres wide) a cluster must cover to start a track: a
+   *  body moving in, not the one or two edge cells of a post or a wall that
+   *  grazing rays had seen free. (In cluttered worlds holding no people,
+   *  the would-be tracks were one cell in the median, and their lanes and
+   *  growth closed gaps; a person's moved-in cells at a lidar's ranges: 12
+   *  in the median.) A smaller cluster continues a track that exists (a
+   *  person partly hidden). */
+  int min_cells = 3;
+  double cell = 0.05;  ///< m, the grid min_cells counts on (the navigation resolution)
+  /** m, a track walks (sweeps a lane, may be hidden nearby) only once its
+   *  centroid moved this far within the window: the edge cells of a post
+   *  slide around it as the robot passes, their centroid "walking" a few
+   *  centimetres; a person walking at 0.5 m/s is this far after 0.4 s. */
+  double min_travel = 0.2;
 };
 
 /** One tracked moving obstacle (odometry frame). */
@@ -40,7 +54,7 @@ struct MovingTrack {
   double radius = 0;    ///< m, largest distance of its points from the centroid
   double seen = 0;      ///< s, time of the last sighting
   int sightings = 0;    ///< cycles it was seen in
-  bool walked = false;  ///< it was seen walking (above min_speed) at some time
+  bool walked = false;  ///< it was seen walking (min_speed, min_travel) at some time
   std::vector<std::pair<double, TPoint2D>> history;  ///< (time, centroid) within the window
 };
 
@@ -50,6 +64,10 @@ class MovingTracker {
   /** The points that moved in, seen at time `t`. */
   void update(const std::vector<TPoint2D>& moved_in, double t);
   const std::vector<MovingTrack>& tracks() const { return tracks_; }
+  /** The points of the last update that belong to a track (that started
+   *  or continued one): the moving obstacles; the others are left to the
+   *  obstacle memory as what they are, hits. */
+  const std::vector<TPoint2D>& bodies() const { return bodies_; }
   /** Where the tracks with a velocity go within `horizon` seconds: points
    *  every `step` metres along each track's velocity from its centroid
    *  (excluded), across a lane as wide as the track's spread (its radius)
@@ -67,11 +85,17 @@ class MovingTracker {
  private:
   MovingTrackerParams p_;
   std::vector<MovingTrack> tracks_;
+  std::vector<TPoint2D> bodies_;
   double latest_ = -1e300;  // time of the last update
 };
 
 /** Single-link clusters of points (link distance `link`): indices per
  *  cluster, in order of their first point. */
 std::vector<std::vector<size_t>> clusterPoints(const std::vector<TPoint2D>& pts, double link);
+/** m, how far a track's centroid moved over its window (first to last). */
+double travelled(const MovingTrack& k);
+/** How many distinct cells of a grid `cell` metres wide the points `idx` of
+ *  `pts` lie in. */
+size_t distinctCells(const std::vector<TPoint2D>& pts, const std::vector<size_t>& idx, double cell);
 
 }  // namespace carenav::navigation

@@ -106,7 +106,7 @@ struct LocalMapParams {
  *  swept along their velocity.
  *  ```ini
  *  [nav.people]
- *  predict_horizon = 2.0   ; s, 0: no tracking
+ *  predict_horizon = 2.0   ; s, 0: tracks sweep no lanes
  *  ```
  */
 struct PeopleParams {
@@ -121,12 +121,14 @@ struct PeopleParams {
    *  longer seen moving (docs/BENCHMARKS.md, "Navigation in clutter"). */
   double static_memory = 0.0;
   double predict_horizon = 2.0;  ///< s, tracked moving obstacles are swept along their velocity
-                                 ///< this far (0: no tracking)
+                                 ///< this far (0: no lanes, no hidden regions)
   double route_predict_horizon = 8.0;  ///< s, the route avoids a tracked person's lane this far
   double track_radius = 8.0;           ///< m, moving obstacles are told apart from walls this far
   double track_depth_range = 3.0;      ///< m, depth-camera cells farther away never count as moving
   int track_depth_min_cells = 3;       ///< depth: cells moving in together (a body, not noise)
   double track_gate = 0.6;  ///< m, a moving cluster continues the track predicted this close
+  int track_min_cells =
+      3;  ///< cells a moving cluster covers to start a track (a body, not an edge)
   static const ParamTable<PeopleParams>& table();
 };
 
