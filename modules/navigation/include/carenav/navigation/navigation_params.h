@@ -127,8 +127,7 @@ struct PeopleParams {
   double track_depth_range = 3.0;      ///< m, depth-camera cells farther away never count as moving
   int track_depth_min_cells = 3;       ///< depth: cells moving in together (a body, not noise)
   double track_gate = 0.6;  ///< m, a moving cluster continues the track predicted this close
-  int track_min_cells =
-      3;  ///< cells a moving cluster covers to start a track (a body, not an edge)
+  int track_min_cells = 3;  ///< cells a moving cluster covers to start a track (a body)
   static const ParamTable<PeopleParams>& table();
 };
 
