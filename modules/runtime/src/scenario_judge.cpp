@@ -13,6 +13,7 @@ namespace carenav::navigation {
 
 TruthClearance::TruthClearance(const sim::World& w, const RobotParams& robot, double step)
     : w_(w), fp_(robot.footprint, w.resolution()) {
+  for (const auto& q : fp_.polygon) outline_.push_back({q.x, q.y});
   const int nx = w.sizeX(), ny = w.sizeY();
   std::vector<uint8_t> free(static_cast<size_t>(nx) * ny, 1);
   for (int y = 0; y < ny; ++y)
@@ -47,11 +48,9 @@ bool TruthClearance::enters(const sim::Pose2& p, const std::vector<TPoint2D>& po
   if (places::pointInPolygon(poly, p.x, p.y)) return true;
   for (const auto& b : fp_.boundary)
     if (places::pointInPolygon(poly, p.x + c * b.x - s * b.y, p.y + s * b.x + c * b.y)) return true;
-  std::vector<TPoint2D> outline;  // the footprint in the robot frame
-  for (const auto& q : fp_.polygon) outline.push_back({q.x, q.y});
   for (const auto& q : poly) {
     const double dx = q.x - p.x, dy = q.y - p.y;
-    if (places::pointInPolygon(outline, c * dx + s * dy, -s * dx + c * dy)) return true;
+    if (places::pointInPolygon(outline_, c * dx + s * dy, -s * dx + c * dy)) return true;
   }
   return false;
 }

@@ -29,6 +29,7 @@ class TruthClearance {
  private:
   const sim::World& w_;
   Footprint fp_;
+  std::vector<TPoint2D> outline_;  // fp_.polygon as the polygon tests take it
   std::vector<float> dist_;
 };
 
