@@ -18,6 +18,7 @@ GlobalPlanner::GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double 
       ny_(static_cast<int>(map.getSizeY())),
       res_(map.getResolution()),
       radius_(robot_radius + p.plan_clearance),
+      floor_(robot_radius + std::min(p.plan_clearance, p.footprint_padding)),
       influence_(robot_radius + p.plan_clearance + 0.5),
       weight_(p.plan_cost_weight),
       passage_margin_(p.passage_margin),
@@ -44,29 +45,30 @@ double GlobalPlanner::clearance(double x, double y) const {
   return dist_[static_cast<size_t>(iy) * nx_ + ix];
 }
 
-bool GlobalPlanner::cellPassable(int ix, int iy) const {
+bool GlobalPlanner::cellPassable(int ix, int iy, double radius) const {
   if (ix < 0 || iy < 0 || ix >= nx_ || iy >= ny_) return false;
   const size_t i = static_cast<size_t>(iy) * nx_ + ix;
-  return free_[i] && dist_[i] > radius_;
+  return free_[i] && dist_[i] > radius;
 }
 
-bool GlobalPlanner::isPassable(double x, double y) const {
-  return cellPassable(map_.x2idx(x), map_.y2idx(y));
+bool GlobalPlanner::isPassable(double x, double y, double radius) const {
+  return cellPassable(map_.x2idx(x), map_.y2idx(y), radius < 0 ? radius_ : radius);
 }
 
-bool GlobalPlanner::lineOfSight(int x0, int y0, int x1, int y1) const {
+bool GlobalPlanner::lineOfSight(int x0, int y0, int x1, int y1, double radius) const {
   // Samples every half cell along the segment.
   const double len = std::hypot(x1 - x0, y1 - y0);
   const int n = std::max(1, static_cast<int>(std::ceil(len * 2)));
   for (int k = 0; k <= n; ++k) {
     const int x = static_cast<int>(std::lround(x0 + (x1 - x0) * double(k) / n));
     const int y = static_cast<int>(std::lround(y0 + (y1 - y0) * double(k) / n));
-    if (!cellPassable(x, y)) return false;
+    if (!cellPassable(x, y, radius)) return false;
   }
   return true;
 }
 
-bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip) const {
+bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip,
+                                  double radius) const {
   if (pts.empty()) return true;
   const TPoint2D s0 = pts.front();
   for (size_t i = 0; i + 1 < pts.size(); ++i) {
@@ -76,7 +78,7 @@ bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip)
       const double x = pts[i].x + (pts[i + 1].x - pts[i].x) * k / n;
       const double y = pts[i].y + (pts[i + 1].y - pts[i].y) * k / n;
       if (std::hypot(x - s0.x, y - s0.y) < skip) continue;
-      if (!isPassable(x, y)) return false;
+      if (!isPassable(x, y, radius)) return false;
     }
   }
   return true;
@@ -200,7 +202,7 @@ std::pair<TPoint2D, double> crossingAxis(const GlobalPlanner& planner, const TPo
 // goals at doorways, reached with in-place turns).
 std::vector<Passage> findPassages(const GlobalPlanner& planner, const std::vector<Cell>& cells,
                                   const std::vector<TPoint2D>& pts, const std::vector<float>& dist,
-                                  int nx, double narrow, double approach) {
+                                  int nx, double narrow, double radius, double approach) {
   std::vector<Passage> passages;
   auto clear = [&](size_t k) {
     return dist[static_cast<size_t>(cells[k].second) * nx + cells[k].first];
@@ -224,8 +226,8 @@ std::vector<Passage> findPassages(const GlobalPlanner& planner, const std::vecto
     if (u.x * ax + u.y * ay < 0) u.x = -u.x, u.y = -u.y;  // in the direction of travel
     const double d = approach;
     const TPoint2D pre{c.x - u.x * d, c.y - u.y * d}, post{c.x + u.x * d, c.y + u.y * d};
-    if (best_gain > planner.clearance(c.x, c.y) && planner.isPassable(pre.x, pre.y) &&
-        planner.isPassable(post.x, post.y))
+    if (best_gain > planner.clearance(c.x, c.y) && planner.isPassable(pre.x, pre.y, radius) &&
+        planner.isPassable(post.x, post.y, radius))
       passages.push_back({best, pre, c, post, u});
     i = j;
   }
@@ -287,34 +289,90 @@ void addWaypoints(const std::vector<Cell>& cells, const std::vector<Passage>& pa
   if (from + 1 < cells.size()) simplify(from, cells.size() - 1);
 }
 
+/** Cells within this many cells of a start or goal cell, squared: passable
+ *  when free, however near an obstacle (a robot parked against a wall). */
+double nearCells2(double radius, double res) { return (radius / res + 1) * (radius / res + 1); }
+
 }  // namespace
 
 std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) const {
   const Cell s_cell = startOrGoalCell(map_, nx_, ny_, free_, s, "start");
   const Cell g_cell = startOrGoalCell(map_, nx_, ny_, free_, g, "goal");
-  // Plain ints, not structured bindings: lambdas below capture them (C++17).
   const int sx = s_cell.first, sy = s_cell.second, gx = g_cell.first, gy = g_cell.second;
+  auto r = planWith(sx, sy, gx, gy, s, g, radius_);
+  if (r || floor_ >= radius_) return r;
+  // No way keeps plan_clearance: the widest way's clearance (just below
+  // its bottleneck, so that the bottleneck's cells pass), at least floor_.
+  const double widest = widestWay(sx, sy, gx, gy, floor_);
+  if (widest <= floor_) return std::nullopt;
+  r = planWith(sx, sy, gx, gy, s, g, std::max(floor_, std::min(radius_, widest - 1e-4)));
+  return r ? r : planWith(sx, sy, gx, gy, s, g, floor_);
+}
+
+double GlobalPlanner::widestWay(int sx, int sy, int gx, int gy, double floor) const {
+  // Cells near start and goal count as clear (planWith admits them at any
+  // radius >= floor, their disc growing with it).
+  const double near2 = nearCells2(floor, res_);
+  auto value = [&](int x, int y) -> double {
+    if (x < 0 || y < 0 || x >= nx_ || y >= ny_) return -1;
+    const size_t i = static_cast<size_t>(y) * nx_ + x;
+    if (!free_[i]) return -1;
+    const double ds = double(x - sx) * (x - sx) + double(y - sy) * (y - sy);
+    const double dg = double(x - gx) * (x - gx) + double(y - gy) * (y - gy);
+    if (ds <= near2 || dg <= near2) return 1e9;
+    return dist_[i] > floor ? dist_[i] : -1;
+  };
+  // Maximin Dijkstra: the best bottleneck known per cell, widest first.
+  std::vector<float> best(static_cast<size_t>(nx_) * ny_, -1.f);
+  using Item = std::pair<float, int32_t>;
+  std::priority_queue<Item> open;
+  const auto idx = [&](int x, int y) { return static_cast<int32_t>(y * nx_ + x); };
+  best[idx(sx, sy)] = 1e9f;
+  open.push({1e9f, idx(sx, sy)});
+  const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1}, dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+  while (!open.empty()) {
+    const auto [b, i] = open.top();
+    open.pop();
+    if (b < best[i]) continue;
+    const int x = i % nx_, y = i / nx_;
+    if (x == gx && y == gy) return std::min<double>(b, 1e6);
+    for (int k = 0; k < 8; ++k) {
+      double v = std::min<double>(b, value(x + dx[k], y + dy[k]));
+      // a diagonal step needs both cells beside it (as in the A* search)
+      if (k >= 4) v = std::min({v, value(x + dx[k], y), value(x, y + dy[k])});
+      const int32_t j = idx(x + dx[k], y + dy[k]);
+      if (v <= floor || v <= best[j]) continue;
+      best[j] = static_cast<float>(v);
+      open.push({best[j], j});
+    }
+  }
+  return 0;
+}
+
+std::optional<Route> GlobalPlanner::planWith(int sx, int sy, int gx, int gy, const TPoint2D& s,
+                                             const TPoint2D& g, double radius) const {
   // Start and goal may lie closer to a wall than the robot's radius (a robot
   // parked against a wall): cells within the radius of them that are free
   // are passable, at a high cost, so the route can leave and reach them.
-  const double near2 = (radius_ / res_ + 1) * (radius_ / res_ + 1);
+  const double near2 = nearCells2(radius, res_);
   auto passable = [&](int x, int y) {
-    if (cellPassable(x, y)) return true;
+    if (cellPassable(x, y, radius)) return true;
     if (x < 0 || y < 0 || x >= nx_ || y >= ny_) return false;
     if (!free_[static_cast<size_t>(y) * nx_ + x]) return false;
     const double ds = double(x - sx) * (x - sx) + double(y - sy) * (y - sy);
     const double dg = double(x - gx) * (x - gx) + double(y - gy) * (y - gy);
     return ds <= near2 || dg <= near2;
   };
-  auto clear = [&](int x, int y) { return cellPassable(x, y); };
+  auto clear = [&](int x, int y) { return cellPassable(x, y, radius); };
   const SearchGrid grid{nx_, ny_, res_, influence_, weight_, dist_};
-  const auto cells = aStarCells(grid, s_cell, g_cell, passable, clear);
+  const auto cells = aStarCells(grid, {sx, sy}, {gx, gy}, passable, clear);
   if (!cells) return std::nullopt;
   Route r;
+  r.radius = radius;
   for (const auto& [x, y] : *cells) r.cells.push_back({map_.idx2x(x), map_.idx2y(y)});
-  const auto passages = findPassages(*this, *cells, r.cells, dist_, nx_, radius_ + passage_margin_,
-                                     passage_approach_);
-  auto sight = [&](int x0, int y0, int x1, int y1) { return lineOfSight(x0, y0, x1, y1); };
+  const auto passages = findPassages(*this, *cells, r.cells, dist_, nx_, radius + passage_margin_,
+                                     radius, passage_approach_);
+  auto sight = [&](int x0, int y0, int x1, int y1) { return lineOfSight(x0, y0, x1, y1, radius); };
   addWaypoints(*cells, passages, passage_approach_, sight, r);
   if (r.waypoints.empty()) r.waypoints.push_back(g);
   r.waypoints.back() = g;
@@ -342,7 +400,7 @@ std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map
   const GlobalPlanner gp(marked, robot_radius, p);
   std::vector<TPoint2D> ahead{from};
   if (route) ahead.insert(ahead.end(), route->waypoints.begin(), route->waypoints.end());
-  const bool blocked = !route || !gp.polylineClear(ahead, skip);
+  const bool blocked = !route || !gp.polylineClear(ahead, skip, route->radius);
   if (blocked && gp.isFree(from.x, from.y) && gp.isFree(goal.x, goal.y)) return gp.plan(from, goal);
   return std::nullopt;
 }

@@ -29,7 +29,8 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
                 "arcs are checked at least this far, even slow ones; farther obstacles "
                 "do not count (dynamic window planners)")
           .real("plan_clearance", &P::plan_clearance, "m", 0, 5,
-                "global route: extra clearance beyond the robot's inscribed radius")
+                "global route: extra clearance beyond the robot's inscribed radius (less where "
+                "no way has it: the widest way's)")
           .real("plan_cost_weight", &P::plan_cost_weight, "", 0, 100,
                 "global route: extra cost near obstacles (keeps routes central)")
           .real("passage_margin", &P::passage_margin, "m", 0, 5,

@@ -52,7 +52,6 @@ NavigationSession::NavigationSession(SessionSetup setup)
     : s_(std::move(setup)),
       nav_(s_.nav, s_.robot),
       fp_(s_.robot.footprint, s_.nav.resolution),
-      route_nav_(s_.nav),
       replanner_(s_.control_rate) {
   const auto locp = s_.profile.section<localization::LocalizationParams>("localization");
   auto percp = s_.profile.section<perception::PerceptionParams>("perception");
@@ -110,24 +109,14 @@ std::vector<TPoint2D> NavigationSession::routePoints() const {
   return out;
 }
 
-// The route from `from` to the goal; when there is no way with
-// plan_clearance to spare, a passage the footprint fits with its padding is
-// taken (and later routes may use it too).
+// The route from `from` to the goal (with plan_clearance to spare, or
+// through the widest passage there is: GlobalPlanner).
 void NavigationSession::planRoute(const TPoint2D& from) {
-  auto plan = [&] {
-    try {
-      return gp_->plan(from, {goal_->x, goal_->y});
-    } catch (const InputError& e) {  // a start or goal off the map: the run's input
-      throw InputError(s_.origin + ": " + e.what());
-    }
-  };
-  auto r = plan();
-  if (!r && route_nav_.plan_clearance > route_nav_.footprint_padding) {
-    route_nav_.plan_clearance = route_nav_.footprint_padding;
-    gp_ = std::make_unique<GlobalPlanner>(*s_.map, fp_.inscribed, route_nav_);
-    r = plan();
+  try {
+    route_ = gp_->plan(from, {goal_->x, goal_->y});
+  } catch (const InputError& e) {  // a start or goal off the map: the run's input
+    throw InputError(s_.origin + ": " + e.what());
   }
-  route_ = r;
   route_start_ = from;
   if (route_)
     nav_.setRoute(routePoints(), *goal_);
@@ -230,7 +219,7 @@ void NavigationSession::replan(size_t k, bool recovery_ended,
   const TPose2D mp = nav_.mapPose();
   if (auto r2 = replanner_.step(people, *s_.map, nav_.obstaclesInMap(), {mp.x, mp.y},
                                 {goal_->x, goal_->y}, route_, fp_.inscribed,
-                                fp_.circumscribed + 0.2, route_nav_)) {
+                                fp_.circumscribed + 0.2, s_.nav)) {
     route_ = r2;
     route_start_ = {mp.x, mp.y};
     nav_.setRoute(routePoints(), *goal_);

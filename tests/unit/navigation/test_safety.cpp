@@ -224,6 +224,44 @@ TEST(GlobalPlanner, NoRouteThroughADoorNarrowerThanTheRobot) {
   EXPECT_THROW(gp.plan({2, 3}, {5, 3}), InputError);   // on the wall
 }
 
+TEST(GlobalPlanner, WithoutRoomToSpareTakesTheWidestPassageNotTheNearest) {
+  // twoRooms' door at y = 1.5 on the straight way and a second door at
+  // y = `upper_y`, farther round; both narrower than the robot's diameter
+  // plus 2 x plan_clearance. The route used to fall back to the footprint's
+  // padding and take the nearest door, however tight; it takes the widest.
+  NavigationParams p;
+  p.plan_clearance = 0.2;  // footprint_padding 0.02
+  const double robot = 0.22;
+  for (const double upper_y : {3.0, 4.0, 4.5}) {
+    for (const bool wider_up : {true, false}) {
+      auto g = twoRooms(wider_up ? 0.55 : 0.75, false);
+      for (double x = 4.95; x <= 5.05; x += 0.025)
+        for (double y = -0.5; y <= 0.5; y += 0.025)
+          if (std::abs(y) < (wider_up ? 0.75 : 0.55) / 2) g.setPos(x, upper_y + y, 0.95f);
+      const GlobalPlanner gp(g, robot, p);
+      const double low = gp.clearance(5, 1.5), up = gp.clearance(5, upper_y);
+      ASSERT_LT(std::max(low, up), robot + p.plan_clearance) << "both doors too narrow to spare";
+      ASSERT_GT(std::abs(up - low), 0.04);
+      const auto r = gp.plan({2, 1.5}, {8, 1.5});
+      ASSERT_TRUE(r.has_value()) << upper_y;
+      bool upper = false;
+      for (const auto& c : r->cells) upper = upper || (std::abs(c.x - 5) < 0.1 && c.y > 2.5);
+      EXPECT_EQ(upper, wider_up) << "door at " << upper_y;
+      EXPECT_GT(r->radius, std::min(low, up));
+      EXPECT_LE(r->radius, std::max(low, up));
+      EXPECT_TRUE(gp.polylineClear(r->waypoints, 0.3, r->radius));
+    }
+  }
+  // One door only, narrower than robot + plan_clearance: taken, keeping the
+  // most it allows; narrower than robot + footprint_padding: no route.
+  const GlobalPlanner one(twoRooms(0.55, false), robot, p);
+  const auto r = one.plan({2, 1.5}, {8, 1.5});
+  ASSERT_TRUE(r.has_value());
+  EXPECT_GT(r->radius, robot + p.footprint_padding);
+  const GlobalPlanner tight(twoRooms(0.45, false), robot, p);
+  EXPECT_FALSE(tight.plan({2, 1.5}, {8, 1.5}).has_value());
+}
+
 /** Two walls across a 10 x 3 m corridor at x = 5 and x = 6, each with a
  *  0.9 m door centred at y = 1.5: two narrow passages 1 m apart. */
 mrpt::maps::COccupancyGridMap2D twoDoors() {

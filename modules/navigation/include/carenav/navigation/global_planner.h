@@ -22,12 +22,21 @@ struct Route {
    *  it; ending at the goal. */
   std::vector<TPoint2D> waypoints;
   double length = 0;  ///< m, along the waypoints
+  /** m, the clearance from its centre line to anything not free that the
+   *  route keeps: the robot's radius plus plan_clearance, or less where the
+   *  map allows no more (GlobalPlanner::plan). */
+  double radius = 0;
 };
 
 /** A* over the cells of a static occupancy grid. A cell is passable when it
  *  is free (p_free above free_threshold) and farther than `robot_radius` +
  *  plan_clearance from every cell that is not free (occupied or unknown).
- *  Steps cost their length, more near obstacles (plan_cost_weight). */
+ *  Steps cost their length, more near obstacles (plan_cost_weight). When no
+ *  route keeps that much, the route keeps the most that some way from start
+ *  to goal allows (the bottleneck of the widest way: a maximin path), if that
+ *  is more than `robot_radius` + footprint_padding: a robot that must pass a
+ *  narrow gap takes the widest one there is, not the narrowest one on the
+ *  shortest way. */
 class GlobalPlanner {
  public:
   GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double robot_radius,
@@ -37,20 +46,29 @@ class GlobalPlanner {
   std::optional<Route> plan(const TPoint2D& start, const TPoint2D& goal) const;
   /** The cell at (x, y) is free space (not necessarily passable). */
   bool isFree(double x, double y) const;
-  bool isPassable(double x, double y) const;
+  /** Free and farther than `radius` (default: robot radius + plan_clearance)
+   *  from anything not free. */
+  bool isPassable(double x, double y, double radius = -1) const;
   /** True when every segment of the polyline crosses passable cells only
    *  (the first `skip` metres from its start excepted: the robot may stand
-   *  closer to an obstacle than the route may pass). */
-  bool polylineClear(const std::vector<TPoint2D>& pts, double skip = 0) const;
+   *  closer to an obstacle than the route may pass); `radius` as isPassable. */
+  bool polylineClear(const std::vector<TPoint2D>& pts, double skip = 0, double radius = -1) const;
   /** m, from (x, y) to the nearest cell that is not free. */
   double clearance(double x, double y) const;
 
  private:
-  bool cellPassable(int ix, int iy) const;
-  bool lineOfSight(int x0, int y0, int x1, int y1) const;
+  bool cellPassable(int ix, int iy, double radius) const;
+  bool lineOfSight(int x0, int y0, int x1, int y1, double radius) const;
+  /** The route between two cells keeping `radius` (cells near them excepted). */
+  std::optional<Route> planWith(int sx, int sy, int gx, int gy, const TPoint2D& start,
+                                const TPoint2D& goal, double radius) const;
+  /** m, the largest clearance some 8-connected way between the cells keeps
+   *  (over cells passable at `floor`, those near start and goal counted as
+   *  clear); 0 when there is none. */
+  double widestWay(int sx, int sy, int gx, int gy, double floor) const;
   const mrpt::maps::COccupancyGridMap2D& map_;
   int nx_ = 0, ny_ = 0;
-  double res_ = 0, radius_ = 0, influence_ = 0, weight_ = 0;
+  double res_ = 0, radius_ = 0, floor_ = 0, influence_ = 0, weight_ = 0;
   double passage_margin_ = 0, passage_approach_ = 0;
   std::vector<uint8_t> free_;
   std::vector<float> dist_;  // m to the nearest non-free cell

@@ -181,7 +181,6 @@ class NavigationSession {
   double end_t_ = 0;
   std::string gave_up_note_;
   Footprint fp_;
-  NavigationParams route_nav_;  ///< the route's clearance (narrowed when nothing else fits)
   std::unique_ptr<GlobalPlanner> gp_;
   RouteReplanner replanner_;
   // sensors
