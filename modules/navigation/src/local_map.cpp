@@ -309,6 +309,42 @@ void FreeSpaceHistory::prune(double now, double keep, double keep_hits) {
       ++it;
 }
 
+// ---------------------------------------------------------------- seen free
+
+void SeenFree::addScan(const WorldScan& s, const Sight& stamp) {
+  if (!finite(s.origin)) return;
+  const uint64_t o = packCell(s.origin.x, s.origin.y, res_);
+  visited_.begin(keyX(o), keyY(o), static_cast<int64_t>(std::ceil(radius_ / res_)));
+  for (size_t i = 0; i < s.ends.size(); ++i) {
+    if (!finite(s.ends[i])) continue;
+    const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
+    const double len = std::hypot(dx, dy);
+    if (len <= 0) continue;
+    // a cell short of a hit: the range noise must not free the obstacle's cell
+    const double stop = std::min((i < s.hit.size() && s.hit[i]) ? len - res_ : len, radius_);
+    for (double d = std::max(s.range_min, 0.0); d < stop; d += res_ / 2) {
+      const uint64_t k = packCell(s.origin.x + dx * d / len, s.origin.y + dy * d / len, res_);
+      if (visited_.first(keyX(k), keyY(k))) cells_[k] = stamp;
+    }
+  }
+}
+
+void SeenFree::prune(const TPoint2D& robot, const std::function<bool(const Sight&)>& keep) {
+  const double r = radius_ / res_ + 1;
+  const double cx = robot.x / res_ - 0.5, cy = robot.y / res_ - 0.5;
+  for (auto it = cells_.begin(); it != cells_.end();)
+    if (std::hypot(keyX(it->first) - cx, keyY(it->first) - cy) > r || !keep(it->second))
+      it = cells_.erase(it);
+    else
+      ++it;
+}
+
+const SeenFree::Sight* SeenFree::at(double x, double y) const {
+  if (!std::isfinite(x) || !std::isfinite(y)) return nullptr;
+  const auto it = cells_.find(packCell(x, y, res_));
+  return it == cells_.end() ? nullptr : &it->second;
+}
+
 // ---------------------------------------------------------------- footprint
 
 namespace {

@@ -269,13 +269,13 @@ std::optional<Maneuver> ManeuverPlanner::search(const LocalCostmap& map, const T
     for (const Primitive& m : cand) {
       const TPose2D q = applyPrimitive(at, m.dir, m.length, m.turn);
       if (std::hypot(q.x - start.x, q.y - start.y) > p_.radius) continue;
-      if (m.dir < 0 && reverse_ok && !reverse_ok(q)) continue;
       double g = cur.g + (m.dir < 0 ? p_.reverse_cost : 1.0) * m.length +
                  std::abs(m.turn) * (m.dir == 0 ? lever_ : 0.0);
       if (m.dir != 0 && cur.dir != 0 && m.dir != cur.dir) g += p_.switch_cost;
       const int64_t kq = key(q);
       const auto it = best.find(kq);
       if (it != best.end() && it->second <= g) continue;
+      if (m.dir < 0 && reverse_ok && !reverse_ok(q)) continue;
       const double hq = h(q);
       if (!std::isfinite(hq)) continue;  // no way on from there
       const Sweep sw = sweep(map, at, cur.clearance, m, floor, margin);

@@ -112,6 +112,7 @@ bool Navigator::addObservation(const mrpt::obs::CObservation& obs, const TPose2D
       ws.hit.push_back(r < max_range - 1e-3 ? 1 : 0);
     }
     memory_.add(ws, t);
+    recovery_.addSeen(ws, t);
     if (p_.predict_speed * p_.predict_time > 0) {
       free_history_.addScan(ws, t);
       for (size_t i = 0; i < ws.ends.size(); ++i)

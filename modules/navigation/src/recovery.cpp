@@ -31,6 +31,66 @@ constexpr int kManeuverReplans = 3;
  *  face the route goes on up to this many times `backup_distance`. */
 constexpr double kTurnableBackups = 3.0;
 
+/** Where a maneuver may reverse: a grid of cells around the robot known
+ *  free (under the footprint along the recorded path, or seen free by a
+ *  sensor lately), and the footprint where the robot stands. */
+class KnownFree {
+ public:
+  KnownFree(const TPose2D& at, double radius, double res, const Footprint& fp)
+      : at_(at), res_(res), fp_(fp) {
+    ix0_ = static_cast<int64_t>(std::floor((at.x - radius) / res));
+    iy0_ = static_cast<int64_t>(std::floor((at.y - radius) / res));
+    n_ = static_cast<int64_t>(std::ceil(2 * radius / res)) + 2;
+    cells_.assign(static_cast<size_t>(n_ * n_), 0);
+  }
+  /** Cells whose centre the footprint at `p` covers. */
+  void addFootprint(const TPose2D& p) {
+    const double c = std::cos(p.phi), s = std::sin(p.phi), r = fp_.circumscribed;
+    for (int64_t iy = cell(p.y - r, iy0_); iy <= cell(p.y + r, iy0_); ++iy)
+      for (int64_t ix = cell(p.x - r, ix0_); ix <= cell(p.x + r, ix0_); ++ix) {
+        if (!inside(ix, iy)) continue;
+        const double dx = (ix0_ + ix + 0.5) * res_ - p.x, dy = (iy0_ + iy + 0.5) * res_ - p.y;
+        if (fp_.contains(c * dx + s * dy, -s * dx + c * dy)) cells_[index(ix, iy)] = 1;
+      }
+  }
+  /** Cells whose sighting `fresh` accepts. */
+  template <class Fresh>
+  void addSeen(const SeenFree& seen, const Fresh& fresh) {
+    for (int64_t iy = 0; iy < n_; ++iy)
+      for (int64_t ix = 0; ix < n_; ++ix) {
+        const SeenFree::Sight* s = seen.at((ix0_ + ix + 0.5) * res_, (iy0_ + iy + 0.5) * res_);
+        if (s && fresh(*s)) cells_[index(ix, iy)] = 1;
+      }
+  }
+  /** Every sample of the footprint at `q` lies in the footprint where the
+   *  robot stands or in a known-free cell. */
+  bool covers(const TPose2D& q) const {
+    const double cq = std::cos(q.phi), sq = std::sin(q.phi);
+    const double ca = std::cos(at_.phi), sa = std::sin(at_.phi);
+    auto known = [&](const TPoint2D& p) {
+      const double x = q.x + cq * p.x - sq * p.y, y = q.y + sq * p.x + cq * p.y;
+      const int64_t ix = cell(x, ix0_), iy = cell(y, iy0_);
+      if (inside(ix, iy) && cells_[index(ix, iy)]) return true;
+      const double dx = x - at_.x, dy = y - at_.y;
+      return fp_.contains(ca * dx + sa * dy, -sa * dx + ca * dy);
+    };
+    return std::all_of(fp_.boundary.begin(), fp_.boundary.end(), known) &&
+           std::all_of(fp_.interior.begin(), fp_.interior.end(), known);
+  }
+
+ private:
+  int64_t cell(double v, int64_t origin) const {
+    return static_cast<int64_t>(std::floor(v / res_)) - origin;
+  }
+  bool inside(int64_t ix, int64_t iy) const { return ix >= 0 && iy >= 0 && ix < n_ && iy < n_; }
+  size_t index(int64_t ix, int64_t iy) const { return static_cast<size_t>(iy * n_ + ix); }
+  TPose2D at_;
+  double res_;
+  const Footprint& fp_;
+  int64_t ix0_ = 0, iy0_ = 0, n_ = 0;
+  std::vector<uint8_t> cells_;
+};
+
 }  // namespace
 
 const ParamTable<RecoveryParams>& RecoveryParams::table() {
@@ -84,14 +144,31 @@ const ParamTable<RecoveryParams>& RecoveryParams::table() {
           .real("odom_error_w", &P::odom_error_w, "rad/rad", 0, 1,
                 "odometry heading error bound per radian turned")
           .real("odom_error_wd", &P::odom_error_wd, "rad/m", 0, 1,
-                "odometry heading error bound per metre travelled");
+                "odometry heading error bound per metre travelled")
+          .real("seen_keep", &P::seen_keep, "s", 0, 600,
+                "a maneuver may also reverse where a sensor saw free space this recently (the "
+                "lidar's blind rear was in view before; odometry error since within "
+                "backup_margin); 0: over the recorded path only");
   return t;
 }
 
 Recovery::Recovery(const RecoveryParams& p, const RobotParams& robot, const NavigationParams& nav,
                    const ManeuverParams& mp)
-    : p_(p), r_(robot), nav_(nav), planner_(mp, robot) {
+    : p_(p), r_(robot), nav_(nav), planner_(mp, robot), seen_(nav.resolution, mp.radius + 1.0) {
   for (const auto& q : r_.footprint) lever_ = std::max(lever_, std::hypot(q.x, q.y));
+}
+
+double Recovery::odomError(double travel, double turned) const {
+  const double d = travel_ - travel, a = turned_ - turned;
+  return p_.odom_error_d * d + (p_.odom_error_w * a + p_.odom_error_wd * d) * lever_;
+}
+
+void Recovery::addSeen(const WorldScan& scan, double t) {
+  if (!(p_.seen_keep > 0)) return;
+  seen_.prune(scan.robot.value_or(scan.origin), [&](const SeenFree::Sight& s) {
+    return t - s.t <= p_.seen_keep && odomError(s.travel, s.turned) <= p_.backup_margin;
+  });
+  seen_.addScan(scan, {t, travel_, turned_});
 }
 
 const char* Recovery::phaseName(Phase p) {
@@ -122,9 +199,7 @@ void Recovery::trackOdometry(const TPose2D& pose) {
   // since: the oldest go first.
   size_t drop = 0;
   while (drop < path_odo_.size()) {
-    const double d = travel_ - path_odo_[drop].first, a = turned_ - path_odo_[drop].second;
-    const double err = p_.odom_error_d * d + (p_.odom_error_w * a + p_.odom_error_wd * d) * lever_;
-    if (err <= p_.backup_margin) break;
+    if (odomError(path_odo_[drop].first, path_odo_[drop].second) <= p_.backup_margin) break;
     ++drop;
   }
   path_.erase(path_.begin(), path_.begin() + static_cast<std::ptrdiff_t>(drop));
@@ -360,11 +435,16 @@ std::optional<Maneuver> Recovery::planManeuver(const PlannerInput& in) const {
   if (!planner_.params().enabled || !in.map) return std::nullopt;
   const auto goal = maneuverGoal(in);
   if (!goal) return std::nullopt;
-  // Reversing only over the way the robot came (its footprint swept it).
-  const double inscribed = in.map->footprint().inscribed;
-  const auto swept = [&](const TPose2D& q) {
-    return distanceToPoses(path_, q.x, q.y) <= inscribed;
-  };
+  // Reversing only over the way the robot came (its footprint swept it)
+  // or over space a sensor saw free lately (the lidar's blind rear).
+  const Footprint& fp = in.map->footprint();
+  KnownFree known(in.pose, planner_.params().radius + lever_ + 0.1, nav_.resolution, fp);
+  for (const auto& q : path_) known.addFootprint(q);
+  if (p_.seen_keep > 0)
+    known.addSeen(seen_, [&](const SeenFree::Sight& s) {
+      return in.t - s.t <= p_.seen_keep && odomError(s.travel, s.turned) <= p_.backup_margin;
+    });
+  const auto swept = [&](const TPose2D& q) { return known.covers(q); };
   auto m = planner_.plan(*in.map, in.pose, *goal, swept);
   if (m && m->steps.empty()) return std::nullopt;  // already there: nothing to maneuver
   return m;

@@ -746,17 +746,36 @@ TEST(Recovery, BacksOutOfAWedgeUntilItCanTurnAndFacesTheRouteBeforeReplanning) {
   EXPECT_LT(std::hypot(rec.path().back().x - in.pose.x, rec.path().back().y - in.pose.y), 0.1);
 }
 
-/** Drives the recovery of a robot held at `start` (exact motion, 0.1 s
- *  cycles) until it asks for a replan; every command passes the
- *  supervisor's rule and nothing is touched. Returns the end pose and
- *  whether a maneuver step was among the commands. */
-/** Recovers from `start`, every command driven for a cycle by a robot that
- *  turns `turn_gain` times what it is told (slip, a slow controller); the
- *  end pose and whether a maneuver was driven. */
+/** Drives the recovery of a robot held at `start` (0.1 s cycles, every
+ *  command driven by a robot that turns `turn_gain` times what it is told:
+ *  slip, a slow controller) until it asks for a replan; every command
+ *  passes the supervisor's rule and nothing is touched. Returns the end
+ *  pose and whether a maneuver step was among the commands. */
+/** A 270 deg lidar 0.12 m ahead of the robot's centre at `p`: 541 rays of
+ *  4 m at most, each ending at the first obstacle point it passes within
+ *  2 cm of. */
+WorldScan lidarScan(const TPose2D& p, const std::vector<TPoint2D>& obs) {
+  WorldScan w;
+  w.origin = {p.x + 0.12 * std::cos(p.phi), p.y + 0.12 * std::sin(p.phi)};
+  for (int k = 0; k <= 540; ++k) {
+    const double a = p.phi + (k - 270) * M_PI / 360, c = std::cos(a), s = std::sin(a);
+    double len = 4.0;
+    for (const auto& o : obs) {
+      const double along = (o.x - w.origin.x) * c + (o.y - w.origin.y) * s;
+      const double across = -(o.x - w.origin.x) * s + (o.y - w.origin.y) * c;
+      if (along > 0 && std::abs(across) < 0.02) len = std::min(len, along);
+    }
+    w.ends.push_back({w.origin.x + len * c, w.origin.y + len * s});
+    w.hit.push_back(len < 4.0 ? 1 : 0);
+  }
+  return w;
+}
+
 std::pair<TPose2D, bool> recoverFrom(Recovery& rec, const LocalCostmap& map, const TPose2D& start,
                                      const std::vector<TPoint2D>& route, const RobotParams& r,
                                      const NavigationParams& nav, double margin,
-                                     double turn_gain = 1.0) {
+                                     double turn_gain = 1.0,
+                                     const std::vector<TPoint2D>* lidar_sees = nullptr) {
   PlannerInput in;
   in.map = &map;
   in.pose = start;
@@ -776,6 +795,7 @@ std::pair<TPose2D, bool> recoverFrom(Recovery& rec, const LocalCostmap& map, con
     in.pose = move(in.pose, {o->cmd.v, o->cmd.w * turn_gain}, 0.1);
     EXPECT_FALSE(map.check(in.pose).collision) << "t " << t << " " << o->note;
     rec.recordPose(in.pose);
+    if (lidar_sees) rec.addSeen(lidarScan(in.pose, *lidar_sees), t);
   }
   return {in.pose, maneuvered};
 }
@@ -831,6 +851,58 @@ TEST(Recovery, ManeuversThroughTheGapMouthItIsWedgedInWhereBackingOutStaysBefore
   }
 }
 
+TEST(Recovery, AManeuverReversesOverSpaceALidarSawFreeNotOverSpaceNeverSeen) {
+  // A wall 8 cm ahead of the robot's front: it can neither go on nor turn
+  // on the spot (its front corners sweep into the wall), and the route goes
+  // back behind it. It did not drive here along that way (its recorded
+  // path is where it stands), so the recorded path allows no reversing; a
+  // 270 deg lidar never sees behind the robot, but a scan from a pose it
+  // had earlier saw that space free. With the sighting fresh, a maneuver
+  // reverses over it and turns to the route; with none, or one older than
+  // seen_keep, or with seen_keep 0, nothing reverses.
+  const NavigationParams nav;
+  const RobotParams r = fastRobotAt(0.5);
+  std::vector<TPoint2D> obs;
+  segment(obs, {0.335, -1.5}, {0.335, 1.5});
+  LocalCostmap map(nav, Footprint(r.footprint, nav.resolution));
+  map.build({0, 0}, obs);
+  const TPose2D start{0, 0, 0};
+  ASSERT_FALSE(map.check(start).collision);
+  const std::vector<TPoint2D> route{{0, 0}, {-3, 0}};
+  // A scan from (-0.5, -1.2): rays 3 m long all round, the wall's stop at it.
+  WorldScan scan;
+  scan.origin = {-0.5, -1.2};
+  for (int k = 0; k < 720; ++k) {
+    const double a = k * M_PI / 360, c = std::cos(a), s = std::sin(a);
+    double len = 3.0;
+    if (c > 1e-9) len = std::min(len, (0.335 - scan.origin.x) / c);
+    scan.ends.push_back({scan.origin.x + len * c, scan.origin.y + len * s});
+    scan.hit.push_back(len < 3.0 ? 1 : 0);
+  }
+  struct Case {
+    const char* what;
+    double keep, seen_at;
+    bool scanned, reverses;
+  };
+  for (const Case& c :
+       {Case{"seen 1 s ago", 30, -1, true, true}, Case{"never seen", 30, -1, false, false},
+        Case{"seen 40 s ago", 30, -40, true, false}, Case{"seen_keep 0", 0, -1, true, false}}) {
+    RecoveryParams rp;
+    rp.seen_keep = c.keep;
+    Recovery rec(rp, r, nav);
+    rec.recordPose(start);
+    if (c.scanned) rec.addSeen(scan, c.seen_at);
+    const auto [end, maneuvered] = recoverFrom(rec, map, start, route, r, nav, rp.backup_margin);
+    EXPECT_EQ(maneuvered, c.reverses) << c.what;
+    if (c.reverses) {
+      EXPECT_LT(end.x, -0.5) << c.what;
+      EXPECT_GT(std::abs(std::remainder(end.phi, 2 * M_PI)), M_PI / 2) << c.what;
+    } else {
+      EXPECT_GT(end.x, -0.1) << c.what << ": reversed into space never seen";
+    }
+  }
+}
+
 TEST(Recovery, AManeuverDrivenByARobotThatTurnsTooFarOrTooLittleStillEndsOnItsWay) {
   // A maneuver's steps end at their planned poses (heading fed back), not
   // after their angle and length: a robot that turns half as much again, or 30 % less, than
@@ -849,8 +921,12 @@ TEST(Recovery, AManeuverDrivenByARobotThatTurnsTooFarOrTooLittleStillEndsOnItsWa
     RecoveryParams rp;
     ManeuverParams mp;
     Recovery rec(rp, r, nav, mp);
-    for (const auto& q : came) rec.recordPose(q);
-    const auto [end, maneuvered] = recoverFrom(rec, map, p, route, r, nav, rp.backup_margin, gain);
+    for (size_t i = 0; i < came.size(); ++i) {
+      rec.recordPose(came[i]);
+      if (i % 20 == 0) rec.addSeen(lidarScan(came[i], g.obs), 0);
+    }
+    const auto [end, maneuvered] =
+        recoverFrom(rec, map, p, route, r, nav, rp.backup_margin, gain, &g.obs);
     EXPECT_TRUE(maneuvered) << gain;
     EXPECT_GT(end.x, g.gx + 0.3) << "turn gain " << gain;
     EXPECT_LT(std::abs(end.y), mp.goal_radius + 0.1) << "turn gain " << gain;

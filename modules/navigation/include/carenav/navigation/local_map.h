@@ -11,6 +11,7 @@
 #include <mrpt/math/TPose2D.h>
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <unordered_map>
 #include <vector>
@@ -174,6 +175,33 @@ class FreeSpaceHistory {
     double hit_since = -1e300;             ///< first hit since the cell was last seen free
   };
   std::unordered_map<uint64_t, Stretch> cells_;
+};
+
+/** Where a sensor saw free space: per cell, its latest sighting (a ray
+ *  passed through it, up to a cell short of the ray's hit) with the stamp
+ *  the caller gives (time, and the odometry travelled and turned then, for
+ *  the error of where the cell lies now), within `radius` of the sensor. A
+ *  270 deg lidar never sees behind the robot; it saw that space as the
+ *  robot came (Recovery: a maneuver may reverse over it). */
+class SeenFree {
+ public:
+  struct Sight {
+    double t = 0, travel = 0, turned = 0;
+  };
+  SeenFree(double resolution, double radius) : res_(resolution), radius_(radius) {}
+  void addScan(const WorldScan& scan, const Sight& stamp);
+  /** Drops the cells farther than `radius` from `robot` and those whose
+   *  sighting `keep` refuses. */
+  void prune(const TPoint2D& robot, const std::function<bool(const Sight&)>& keep);
+  /** The cell's latest sighting; null when none is kept. */
+  const Sight* at(double x, double y) const;
+  double resolution() const { return res_; }
+  size_t size() const { return cells_.size(); }
+
+ private:
+  double res_, radius_;
+  ScanCells visited_;
+  std::unordered_map<uint64_t, Sight> cells_;
 };
 
 /** The robot's footprint with what the queries need. */

@@ -55,6 +55,11 @@ struct RecoveryParams {
   double odom_error_d = 0.02;
   double odom_error_w = 0.02;
   double odom_error_wd = 0.01;
+  /** s, a maneuver may also reverse where a sensor saw free space this
+   *  recently (and the odometry error since is within backup_margin): a
+   *  270 deg lidar's blind rear was in view before; 0: over the recorded
+   *  path only. */
+  double seen_keep = 30;
   static const ParamTable<RecoveryParams>& table();
 };
 
@@ -68,6 +73,9 @@ class Recovery {
 
   /** The robot's pose each cycle (its recent path: known free). */
   void recordPose(const TPose2D& pose);
+  /** A scan in the odometry frame at time `t`: the space its rays crossed
+   *  was free (a maneuver may reverse over it; seen_keep). */
+  void addSeen(const WorldScan& scan, double t);
   /** One cycle: `plan` is the planner's answer, `blocked` whether the
    *  robot was held (planner found nothing or the supervisor stopped it),
    *  `route_left` the route length still to go (m). Returns the command to
@@ -168,6 +176,10 @@ class Recovery {
   double travel_ = 0, turned_ = 0;
   std::optional<TPose2D> odo_last_;
   double lever_ = 0;  // m, the footprint's farthest corner from the centre
+  SeenFree seen_;
+  /** m, the error at the footprint's corners of what the odometry measured
+   *  after it had travelled `travel` m and turned `turned` rad. */
+  double odomError(double travel, double turned) const;
   /** Adds the motion since the last recorded cycle, and forgets the oldest
    *  poses whose odometry error since may exceed backup_margin. */
   void trackOdometry(const TPose2D& pose);
