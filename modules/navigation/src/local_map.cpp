@@ -47,6 +47,28 @@ int32_t keyY(uint64_t key) { return signedHalf(key & 0xffffffffu); }
 
 bool finite(const TPoint2D& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
 
+/** Walks the rays of `s` (its origin finite) from where the sensor sees to
+ *  `short_of_hit` before each hit (or to the ray's end), at most `reach`
+ *  from the origin, every `step` m; calls f(key, x, y) once per cell. */
+template <class F>
+void walkRays(const WorldScan& s, ScanCells& visited, double res, double reach, double short_of_hit,
+              double step, const F& f) {
+  const uint64_t o = packCell(s.origin.x, s.origin.y, res);
+  visited.begin(keyX(o), keyY(o), static_cast<int64_t>(std::ceil(reach / res)));
+  for (size_t i = 0; i < s.ends.size(); ++i) {
+    if (!finite(s.ends[i])) continue;
+    const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
+    const double len = std::hypot(dx, dy);
+    if (len <= 0) continue;
+    const double stop = std::min((i < s.hit.size() && s.hit[i]) ? len - short_of_hit : len, reach);
+    for (double d = std::max(s.range_min, 0.0); d < stop; d += step) {
+      const double x = s.origin.x + dx * d / len, y = s.origin.y + dy * d / len;
+      const uint64_t k = packCell(x, y, res);
+      if (visited.first(keyX(k), keyY(k))) f(k, x, y);
+    }
+  }
+}
+
 }  // namespace
 
 void ScanCells::begin(int64_t ox, int64_t oy, int64_t reach_cells) {
@@ -88,21 +110,11 @@ void ObstacleMemory::add(const WorldScan& s, double t) {
     const double y = (static_cast<double>(keyY(k)) + 0.5) * res_;
     reach = std::max(reach, std::hypot(x - s.origin.x, y - s.origin.y) + res_);
   }
-  const uint64_t o = key(s.origin.x, s.origin.y);
-  visited_.begin(keyX(o), keyY(o), static_cast<int64_t>(std::ceil(reach / res_)));
-  for (size_t i = 0; i < s.ends.size(); ++i) {
-    if (!finite(s.ends[i])) continue;
-    const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
-    const double len = std::hypot(dx, dy);
-    if (len <= 0) continue;
-    const double stop = std::min((i < s.hit.size() && s.hit[i]) ? len - res_ : len, reach);
-    for (double d = std::max(s.range_min, 0.0); d < stop; d += res_ * 0.5) {
-      const uint64_t k = key(s.origin.x + dx * d / len, s.origin.y + dy * d / len);
-      if (!visited_.first(keyX(k), keyY(k))) continue;  // cleared already by this scan
-      auto it = cells_.find(k);
-      if (it != cells_.end() && it->second.t < t) cells_.erase(it);
-    }
-  }
+  // Each cell once per scan, up to a cell short of each hit.
+  walkRays(s, visited_, res_, reach, res_, res_ * 0.5, [&](uint64_t k, double, double) {
+    auto it = cells_.find(k);
+    if (it != cells_.end() && it->second.t < t) cells_.erase(it);
+  });
   // Hits whose cell lies beyond the radius would be dropped by the next
   // prune: they are not kept now (nor do they lengthen the next scan's rays).
   const TPoint2D centre = s.robot.value_or(s.origin);
@@ -245,22 +257,10 @@ void FreeSpaceHistory::markHit(double x, double y, double t) {
 
 void FreeSpaceHistory::addScan(const WorldScan& s, double t) {
   if (!finite(s.origin)) return;
-  const uint64_t o = key(s.origin.x, s.origin.y);
-  visited_.begin(keyX(o), keyY(o), static_cast<int64_t>(std::ceil(radius_ / res_)));
-  for (size_t i = 0; i < s.ends.size(); ++i) {
-    if (!finite(s.ends[i])) continue;
-    const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
-    const double len = std::hypot(dx, dy);
-    if (len <= 0) continue;
-    // Stop two cells short of a hit: the range noise must not free the
-    // obstacle's own cell.
-    const double stop = std::min((i < s.hit.size() && s.hit[i]) ? len - 2 * res_ : len, radius_);
-    for (double d = std::max(s.range_min, 0.0); d < stop; d += res_) {
-      const double x = s.origin.x + dx * d / len, y = s.origin.y + dy * d / len;
-      const uint64_t k = key(x, y);
-      if (visited_.first(keyX(k), keyY(k))) markFree(x, y, t);  // once per cell and scan
-    }
-  }
+  // Two cells short of a hit: the range noise must not free the obstacle's
+  // own cell. Each cell once per scan.
+  walkRays(s, visited_, res_, radius_, 2 * res_, res_,
+           [&](uint64_t, double x, double y) { markFree(x, y, t); });
   for (size_t i = 0; i < s.ends.size(); ++i)
     if (i < s.hit.size() && s.hit[i] &&
         std::hypot(s.ends[i].x - s.origin.x, s.ends[i].y - s.origin.y) <= radius_)
@@ -313,20 +313,9 @@ void FreeSpaceHistory::prune(double now, double keep, double keep_hits) {
 
 void SeenFree::addScan(const WorldScan& s, const Sight& stamp) {
   if (!finite(s.origin)) return;
-  const uint64_t o = packCell(s.origin.x, s.origin.y, res_);
-  visited_.begin(keyX(o), keyY(o), static_cast<int64_t>(std::ceil(radius_ / res_)));
-  for (size_t i = 0; i < s.ends.size(); ++i) {
-    if (!finite(s.ends[i])) continue;
-    const double dx = s.ends[i].x - s.origin.x, dy = s.ends[i].y - s.origin.y;
-    const double len = std::hypot(dx, dy);
-    if (len <= 0) continue;
-    // a cell short of a hit: the range noise must not free the obstacle's cell
-    const double stop = std::min((i < s.hit.size() && s.hit[i]) ? len - res_ : len, radius_);
-    for (double d = std::max(s.range_min, 0.0); d < stop; d += res_ / 2) {
-      const uint64_t k = packCell(s.origin.x + dx * d / len, s.origin.y + dy * d / len, res_);
-      if (visited_.first(keyX(k), keyY(k))) cells_[k] = stamp;
-    }
-  }
+  // A cell short of a hit: the range noise must not free the obstacle's cell.
+  walkRays(s, visited_, res_, radius_, res_, res_ / 2,
+           [&](uint64_t k, double, double) { cells_[k] = stamp; });
 }
 
 void SeenFree::prune(const TPoint2D& robot, const std::function<bool(const Sight&)>& keep) {
