@@ -195,7 +195,6 @@ class SeenFree {
   void prune(const TPoint2D& robot, const std::function<bool(const Sight&)>& keep);
   /** The cell's latest sighting; null when none is kept. */
   const Sight* at(double x, double y) const;
-  double resolution() const { return res_; }
   size_t size() const { return cells_.size(); }
 
  private:
