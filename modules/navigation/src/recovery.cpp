@@ -154,8 +154,15 @@ const ParamTable<RecoveryParams>& RecoveryParams::table() {
 
 Recovery::Recovery(const RecoveryParams& p, const RobotParams& robot, const NavigationParams& nav,
                    const ManeuverParams& mp)
-    : p_(p), r_(robot), nav_(nav), planner_(mp, robot), seen_(nav.resolution, mp.radius + 1.0) {
+    : p_(p), r_(robot), nav_(nav), planner_(mp, robot), seen_(nav.resolution, 0) {
   for (const auto& q : r_.footprint) lever_ = std::max(lever_, std::hypot(q.x, q.y));
+  seen_ = SeenFree(nav.resolution, knownRadius());
+}
+
+double Recovery::knownRadius() const { return planner_.params().radius + lever_ + nav_.resolution; }
+
+bool Recovery::fresh(const SeenFree::Sight& s, double now) const {
+  return now - s.t <= p_.seen_keep && odomError(s.travel, s.turned) <= p_.backup_margin;
 }
 
 double Recovery::odomError(double travel, double turned) const {
@@ -165,9 +172,8 @@ double Recovery::odomError(double travel, double turned) const {
 
 void Recovery::addSeen(const WorldScan& scan, double t) {
   if (!(p_.seen_keep > 0)) return;
-  seen_.prune(scan.robot.value_or(scan.origin), [&](const SeenFree::Sight& s) {
-    return t - s.t <= p_.seen_keep && odomError(s.travel, s.turned) <= p_.backup_margin;
-  });
+  seen_.prune(scan.robot.value_or(scan.origin),
+              [&](const SeenFree::Sight& s) { return fresh(s, t); });
   seen_.addScan(scan, {t, travel_, turned_});
 }
 
@@ -438,12 +444,10 @@ std::optional<Maneuver> Recovery::planManeuver(const PlannerInput& in) const {
   // Reversing only over the way the robot came (its footprint swept it)
   // or over space a sensor saw free lately (the lidar's blind rear).
   const Footprint& fp = in.map->footprint();
-  KnownFree known(in.pose, planner_.params().radius + lever_ + 0.1, nav_.resolution, fp);
+  KnownFree known(in.pose, knownRadius(), nav_.resolution, fp);
   for (const auto& q : path_) known.addFootprint(q);
   if (p_.seen_keep > 0)
-    known.addSeen(seen_, [&](const SeenFree::Sight& s) {
-      return in.t - s.t <= p_.seen_keep && odomError(s.travel, s.turned) <= p_.backup_margin;
-    });
+    known.addSeen(seen_, [&](const SeenFree::Sight& s) { return fresh(s, in.t); });
   const auto swept = [&](const TPose2D& q) { return known.covers(q); };
   auto m = planner_.plan(*in.map, in.pose, *goal, swept);
   if (m && m->steps.empty()) return std::nullopt;  // already there: nothing to maneuver

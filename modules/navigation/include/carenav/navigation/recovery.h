@@ -180,6 +180,10 @@ class Recovery {
   /** m, the error at the footprint's corners of what the odometry measured
    *  after it had travelled `travel` m and turned `turned` rad. */
   double odomError(double travel, double turned) const;
+  /** A sighting still trusted at `now` (seen_keep, odometry error). */
+  bool fresh(const SeenFree::Sight& s, double now) const;
+  /** m, around the robot: where a maneuver's footprint can reach. */
+  double knownRadius() const;
   /** Adds the motion since the last recorded cycle, and forgets the oldest
    *  poses whose odometry error since may exceed backup_margin. */
   void trackOdometry(const TPose2D& pose);
