@@ -2,6 +2,9 @@
 #include <carenav/common/errors.h>
 #include <carenav/navigation/global_planner.h>
 #include <carenav/navigation/local_map.h>
+#include <carenav/navigation/polyline.h>
+
+#include "footprint_route.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,6 +13,11 @@
 #include <sstream>
 
 namespace carenav::navigation {
+
+namespace {
+/** p_free above which a cell of the static map is free (GlobalPlanner's default). */
+constexpr double kFreeThreshold = 0.65;
+}  // namespace
 
 GlobalPlanner::GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double robot_radius,
                              const NavigationParams& p, double free_threshold)
@@ -22,7 +30,10 @@ GlobalPlanner::GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double 
       influence_(robot_radius + p.plan_clearance + 0.5),
       weight_(p.plan_cost_weight),
       passage_margin_(p.passage_margin),
-      passage_approach_(p.passage_approach) {
+      passage_approach_(p.passage_approach),
+      footprint_on_(p.route_footprint),
+      footprint_margin_(p.route_footprint_margin),
+      footprint_nodes_(p.route_footprint_nodes) {
   free_.resize(static_cast<size_t>(nx_) * ny_);
   for (int y = 0; y < ny_; ++y)
     for (int x = 0; x < nx_; ++x)
@@ -31,6 +42,21 @@ GlobalPlanner::GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double 
   dist_.resize(d2.size());
   for (size_t i = 0; i < d2.size(); ++i)
     dist_[i] = std::isinf(d2[i]) ? 1e6f : static_cast<float>(std::sqrt(d2[i]) * res_);
+}
+
+void GlobalPlanner::setFootprint(const std::vector<Point2>& polygon) { polygon_ = polygon; }
+
+FootprintRoute GlobalPlanner::footprintRoute(double margin) const {
+  const RouteGrid grid{nx_,    ny_,    res_,       map_.getXMin(), map_.getYMin(),
+                       &free_, &dist_, influence_, weight_};
+  return FootprintRoute(grid, polygon_, margin, footprint_nodes_);
+}
+
+bool GlobalPlanner::footprintClear(const std::vector<TPoint2D>& pts, double skip) const {
+  if (polygon_.empty()) return polylineClear(pts, skip, floor_);
+  // Half the planning margin: a route is not dropped for a centimetre.
+  const FootprintRoute fr = footprintRoute(footprint_margin_ / 2);
+  return fr.drivable(pts, skip);
 }
 
 bool GlobalPlanner::isFree(double x, double y) const {
@@ -300,13 +326,42 @@ std::optional<Route> GlobalPlanner::plan(const TPoint2D& s, const TPoint2D& g) c
   const Cell g_cell = startOrGoalCell(map_, nx_, ny_, free_, g, "goal");
   const int sx = s_cell.first, sy = s_cell.second, gx = g_cell.first, gy = g_cell.second;
   auto r = planWith(sx, sy, gx, gy, s, g, radius_);
-  if (r || floor_ >= radius_) return r;
-  // No way keeps plan_clearance: the widest way's clearance (just below
-  // its bottleneck, so that the bottleneck's cells pass), at least floor_.
-  const double widest = widestWay(sx, sy, gx, gy, floor_);
-  if (widest <= floor_) return std::nullopt;
-  r = planWith(sx, sy, gx, gy, s, g, std::max(floor_, std::min(radius_, widest - 1e-4)));
-  return r ? r : planWith(sx, sy, gx, gy, s, g, floor_);
+  if (!r && floor_ < radius_) {
+    // No way keeps plan_clearance: the widest way's clearance (just below
+    // its bottleneck, so that the bottleneck's cells pass), at least floor_.
+    const double widest = widestWay(sx, sy, gx, gy, floor_);
+    if (widest <= floor_) return std::nullopt;
+    r = planWith(sx, sy, gx, gy, s, g, std::max(floor_, std::min(radius_, widest - 1e-4)));
+    if (!r) r = planWith(sx, sy, gx, gy, s, g, floor_);
+  }
+  if (!r) return r;
+  return drivableRoute(std::move(*r), s, g, sx, sy, gx, gy);
+}
+
+Route GlobalPlanner::drivableRoute(Route r, const TPoint2D& s, const TPoint2D& g, int sx, int sy,
+                                   int gx, int gy) const {
+  if (polygon_.empty() || !footprint_on_) return r;
+  const FootprintRoute fr = footprintRoute(footprint_margin_);
+  // Not checked near start and goal: a robot parked against a wall, a goal
+  // beside one (as the A* search admits them).
+  const double skip = fr.turnRadius();
+  std::vector<TPoint2D> pts{s};
+  pts.insert(pts.end(), r.waypoints.begin(), r.waypoints.end());
+  if (fr.drivable(pts, skip)) return r;
+  const auto way = fr.search({sx, sy}, {gx, gy}, skip);
+  if (!way) return r;  // none: the circle's route (the recoveries' maneuvers remain)
+  Route out;
+  out.cells = way->cells;
+  out.waypoints = way->vertices;
+  out.waypoints.back() = g;
+  out.radius = std::min(r.radius, floor_);
+  out.footprint = true;
+  TPoint2D prev = s;
+  for (const auto& w : out.waypoints) {
+    out.length += std::hypot(w.x - prev.x, w.y - prev.y);
+    prev = w;
+  }
+  return out;
 }
 
 double GlobalPlanner::widestWay(int sx, int sy, int gx, int gy, double floor) const {
@@ -384,23 +439,73 @@ std::optional<Route> GlobalPlanner::planWith(int sx, int sy, int gx, int gy, con
   return r;
 }
 
+namespace {
+
+/** The route from the robot at `from` on: to its nearest point on the
+ *  route, then the route's vertices after it (the part behind the robot,
+ *  and a segment from the robot back to a corner it has passed, are not
+ *  its way ahead). */
+std::vector<TPoint2D> routeAhead(const Route& route, const TPoint2D& from) {
+  std::vector<TPoint2D> line;
+  if (!route.cells.empty()) line.push_back(route.cells.front());
+  line.insert(line.end(), route.waypoints.begin(), route.waypoints.end());
+  std::vector<TPoint2D> ahead{from};
+  if (line.size() < 2) {
+    ahead.insert(ahead.end(), line.begin(), line.end());
+    return ahead;
+  }
+  const PolylinePoint at = nearestOnPolyline(line, from.x, from.y);
+  const TPoint2D& a = line[at.segment];
+  const TPoint2D& b = line[at.segment + 1];
+  ahead.push_back({a.x + at.u * (b.x - a.x), a.y + at.u * (b.y - a.y)});
+  ahead.insert(ahead.end(), line.begin() + static_cast<long>(at.segment) + 1, line.end());
+  return ahead;
+}
+
+}  // namespace
+
 std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map,
                                       const std::vector<TPoint2D>& seen, const TPoint2D& from,
                                       const TPoint2D& goal, const std::optional<Route>& route,
                                       double robot_radius, double skip, const NavigationParams& p,
-                                      const std::vector<TPoint2D>& keep_out) {
+                                      const std::vector<TPoint2D>& keep_out,
+                                      const std::vector<Point2>& footprint) {
   mrpt::maps::COccupancyGridMap2D marked = map;
   auto mark = [&](const TPoint2D& q) {
     if (q.x > marked.getXMin() && q.x < marked.getXMax() && q.y > marked.getYMin() &&
         q.y < marked.getYMax())
       marked.setPos(q.x, q.y, 0.0f);
   };
-  for (const auto& q : seen) mark(q);
+  // With route_footprint: a hit on or beside what the map shows is that
+  // obstacle seen again: its mark would only grow it by a cell (a route
+  // through a gap the map leaves just room for would be blocked by its own
+  // posts); and only the route ahead of the robot is checked.
+  const auto nx = static_cast<int>(map.getSizeX()), ny = static_cast<int>(map.getSizeY());
+  auto mapped = [&](const TPoint2D& q) {
+    const int ix = map.x2idx(q.x), iy = map.y2idx(q.y);
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = ix + dx, y = iy + dy;
+        if (x >= 0 && y >= 0 && x < nx && y < ny && map.getCell(x, y) <= kFreeThreshold)
+          return true;
+      }
+    return false;
+  };
+  const bool footprint_route = p.route_footprint && !footprint.empty();
+  for (const auto& q : seen)
+    if (!footprint_route || !mapped(q)) mark(q);
   for (const auto& q : keep_out) mark(q);
-  const GlobalPlanner gp(marked, robot_radius, p);
+  GlobalPlanner gp(marked, robot_radius, p);
+  gp.setFootprint(footprint);
   std::vector<TPoint2D> ahead{from};
-  if (route) ahead.insert(ahead.end(), route->waypoints.begin(), route->waypoints.end());
-  const bool blocked = !route || !gp.polylineClear(ahead, skip, route->radius);
+  if (route && footprint_route)
+    ahead = routeAhead(*route, from);
+  else if (route)
+    ahead.insert(ahead.end(), route->waypoints.begin(), route->waypoints.end());
+  // A route is checked as it was planned: with the footprint, or with the
+  // inscribed circle at the clearance it keeps.
+  const bool blocked = !route || (route->footprint ? !gp.footprintClear(ahead, skip)
+                                                   : !gp.polylineClear(ahead, skip, route->radius));
   if (blocked && gp.isFree(from.x, from.y) && gp.isFree(goal.x, goal.y)) return gp.plan(from, goal);
   return std::nullopt;
 }
@@ -452,12 +557,13 @@ std::optional<Route> RouteReplanner::step(bool people, const mrpt::maps::COccupa
                                           const std::vector<TPoint2D>& seen, const TPoint2D& from,
                                           const TPoint2D& goal, const std::optional<Route>& route,
                                           double robot_radius, double skip,
-                                          const NavigationParams& p) {
+                                          const NavigationParams& p,
+                                          const std::vector<Point2>& footprint) {
   // the person is gone, or a place has just become one to avoid: plan anew
   const bool fresh = (detour_ && !people) || fresh_;
   fresh_ = false;
   auto r = replanAroundSeen(map, seen, from, goal, fresh ? std::nullopt : route, robot_radius, skip,
-                            p, keepOut(from, goal, map.getResolution()));
+                            p, keepOut(from, goal, map.getResolution()), footprint);
   if (r) detour_ = people;
   return r;
 }

@@ -38,6 +38,16 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
                 "form a narrow passage (a doorway), crossed straight")
           .real("passage_approach", &P::passage_approach, "m", 0.1, 5,
                 "global route: waypoints this far before and after a passage, on its axis")
+          .flag("route_footprint", &P::route_footprint,
+                "global route: one the footprint can drive forward (each segment at its "
+                "heading, turning on the spot at its corners); where the inscribed circle's "
+                "route is not, a search over poses finds one that is (off by default: no "
+                "better on the clutter benchmark, docs/BENCHMARKS.md)")
+          .real("route_footprint_margin", &P::route_footprint_margin, "m", 0, 1,
+                "... keeping the footprint's outline this far from anything not free")
+          .integer("route_footprint_nodes", &P::route_footprint_nodes, "", 1000, 10000000,
+                   "... expanding at most this many (cell, heading) states (bounds its time; "
+                   "none found: the circle's route)")
           .real("goal_tolerance", &P::goal_tolerance, "m", 0.01, 10,
                 "goal reached within this distance ([Conceicao16]: 0.5)")
           .real("goal_tolerance_deg", &P::goal_tolerance_deg, "deg", 0.1, 180,

@@ -98,6 +98,9 @@ bool NavigationSession::setGoals(std::vector<SessionGoal> goals, bool patrol, do
   replanner_.newGoal();
   if (!s_.map) return false;
   gp_ = std::make_unique<GlobalPlanner>(*s_.map, fp_.inscribed, s_.nav);
+  // A robot that drives its route itself gets one its footprint can drive;
+  // a walker's user steers (the route only guides the scripted user).
+  if (!walker_) gp_->setFootprint(fp_.polygon);
   route_origin_ = from;
   planRoute(from);
   return route_.has_value();
@@ -217,9 +220,10 @@ void NavigationSession::replan(size_t k, bool recovery_ended,
   const bool people = !nav_.predicted().empty();
   if (!recovery_ended && !replanner_.due(k, people)) return;
   const TPose2D mp = nav_.mapPose();
-  if (auto r2 = replanner_.step(people, *s_.map, nav_.obstaclesInMap(), {mp.x, mp.y},
-                                {goal_->x, goal_->y}, route_, fp_.inscribed,
-                                fp_.circumscribed + 0.2, s_.nav)) {
+  if (auto r2 =
+          replanner_.step(people, *s_.map, nav_.obstaclesInMap(), {mp.x, mp.y},
+                          {goal_->x, goal_->y}, route_, fp_.inscribed, fp_.circumscribed + 0.2,
+                          s_.nav, walker_ ? std::vector<Point2>{} : fp_.polygon)) {
     route_ = r2;
     route_start_ = {mp.x, mp.y};
     nav_.setRoute(routePoints(), *goal_);

@@ -3,6 +3,7 @@
 // space), with intermediate goals at the corners of the route ([Conceicao16]).
 #pragma once
 
+#include <carenav/common/params.h>
 #include <carenav/navigation/navigation_params.h>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
@@ -15,8 +16,12 @@ namespace carenav::navigation {
 
 using mrpt::math::TPoint2D;
 
+class FootprintRoute;  // footprint_route.h (the module's own)
+
 struct Route {
-  std::vector<TPoint2D> cells;  ///< centres of the cells of the A* path, start to goal
+  /** Centres of the cells of the A* path, start to goal (a route planned
+   *  for the footprint: the poses of its search). */
+  std::vector<TPoint2D> cells;
   /** Corners (line-of-sight simplification) and, at each narrow passage,
    *  a point before it, its centre and a point after it on the axis across
    *  it; ending at the goal. */
@@ -26,6 +31,10 @@ struct Route {
    *  route keeps: the robot's radius plus plan_clearance, or less where the
    *  map allows no more (GlobalPlanner::plan). */
   double radius = 0;
+  /** Planned for the footprint (GlobalPlanner::setFootprint): a route the
+   *  inscribed circle's check would pass is not one the rectangle can
+   *  drive, so it is checked with the footprint. */
+  bool footprint = false;
 };
 
 /** A* over the cells of a static occupancy grid. A cell is passable when it
@@ -41,6 +50,12 @@ class GlobalPlanner {
  public:
   GlobalPlanner(const mrpt::maps::COccupancyGridMap2D& map, double robot_radius,
                 const NavigationParams& p, double free_threshold = 0.65);
+  /** The robot's outline (robot frame): from now on a route must be one the
+   *  footprint can drive (route_footprint): where the inscribed circle's
+   *  route turns or crosses a gap at a slant the rectangle cannot, a search
+   *  over cells and headings finds one it can (footprint_route.h); when none
+   *  is found within route_footprint_nodes, the circle's route stays. */
+  void setFootprint(const std::vector<Point2>& polygon);
   /** nullopt when no route exists. Throws InputError when start or goal lie
    *  outside the map or on a cell that is not free. */
   std::optional<Route> plan(const TPoint2D& start, const TPoint2D& goal) const;
@@ -53,6 +68,11 @@ class GlobalPlanner {
    *  (the first `skip` metres from its start excepted: the robot may stand
    *  closer to an obstacle than the route may pass); `radius` as isPassable. */
   bool polylineClear(const std::vector<TPoint2D>& pts, double skip = 0, double radius = -1) const;
+  /** True when the footprint can drive `pts` forward (each segment at its
+   *  heading, turning on the spot at its vertices) keeping half of
+   *  route_footprint_margin, the first and last `skip` metres excepted;
+   *  without a footprint, polylineClear at the least radius. */
+  bool footprintClear(const std::vector<TPoint2D>& pts, double skip) const;
   /** m, from (x, y) to the nearest cell that is not free. */
   double clearance(double x, double y) const;
 
@@ -66,16 +86,27 @@ class GlobalPlanner {
    *  (over cells passable at `floor`, those near start and goal counted as
    *  clear); 0 when there is none. */
   double widestWay(int sx, int sy, int gx, int gy, double floor) const;
+  FootprintRoute footprintRoute(double margin) const;
+  /** `r` when the footprint can drive it, else a route it can (setFootprint). */
+  Route drivableRoute(Route r, const TPoint2D& start, const TPoint2D& goal, int sx, int sy, int gx,
+                      int gy) const;
   const mrpt::maps::COccupancyGridMap2D& map_;
   int nx_ = 0, ny_ = 0;
   double res_ = 0, radius_ = 0, floor_ = 0, influence_ = 0, weight_ = 0;
   double passage_margin_ = 0, passage_approach_ = 0;
+  std::vector<Point2> polygon_;  // empty: routes for the inscribed circle only
+  bool footprint_on_ = true;
+  double footprint_margin_ = 0;
+  int footprint_nodes_ = 0;
   std::vector<uint8_t> free_;
   std::vector<float> dist_;  // m to the nearest non-free cell
 };
 
 /** Replanning with what the robot has seen: marks `seen` obstacles and the
- *  `keep_out` points (map frame) on a copy of `map` and, when the route
+ *  `keep_out` points (map frame) on a copy of `map` (the robot's outline
+ *  `footprint`, if given: GlobalPlanner::setFootprint; with route_footprint
+ *  then, seen points on or beside the map's own obstacles are not marked
+ *  and the route is checked from the robot's nearest point on it) and, when the route
  *  ahead of `from` is no longer clear of them (beyond `skip` metres), plans
  *  a new one from `from` to `goal`.
  *  nullopt: keep the current route (still clear, or no new one found: a
@@ -84,7 +115,8 @@ std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map
                                       const std::vector<TPoint2D>& seen, const TPoint2D& from,
                                       const TPoint2D& goal, const std::optional<Route>& route,
                                       double robot_radius, double skip, const NavigationParams& p,
-                                      const std::vector<TPoint2D>& keep_out = {});
+                                      const std::vector<TPoint2D>& keep_out = {},
+                                      const std::vector<Point2>& footprint = {});
 
 /** When to replan (the simulator runs and the bridge share it): every 2 s
  *  when the route ahead is blocked by what the robot has seen; every 0.5 s
@@ -114,7 +146,8 @@ class RouteReplanner {
   std::optional<Route> step(bool people, const mrpt::maps::COccupancyGridMap2D& map,
                             const std::vector<TPoint2D>& seen, const TPoint2D& from,
                             const TPoint2D& goal, const std::optional<Route>& route,
-                            double robot_radius, double skip, const NavigationParams& p);
+                            double robot_radius, double skip, const NavigationParams& p,
+                            const std::vector<Point2>& footprint = {});
 
  private:
   /** Points filling the disks of the places to avoid (but one that holds

@@ -172,6 +172,17 @@ struct NavigationParams : DwaParams,
   double plan_cost_weight = 2;  ///< extra route cost per metre near obstacles (keeps paths central)
   double passage_margin = 0.25;   ///< m, route cells closer than radius + this are a narrow passage
   double passage_approach = 0.6;  ///< m, waypoints before and after a passage, on its axis
+  /** The route must be one the footprint can drive forward (each segment at
+   *  its heading, turning on the spot at its vertices), keeping
+   *  route_footprint_margin; where the inscribed circle's route is not, a
+   *  search over poses (at most route_footprint_nodes expansions) finds one
+   *  that is; replanning then also leaves the map's own obstacles unmarked
+   *  and checks the route ahead of the robot only. Off (the default: on
+   *  the clutter benchmark it was no better, docs/BENCHMARKS.md): the
+   *  circle's route. */
+  bool route_footprint = false;
+  double route_footprint_margin = 0.03;  ///< m
+  int route_footprint_nodes = 60000;
   double goal_tolerance = 0.5;    ///< m, goal reached ([Conceicao16])
   double goal_tolerance_deg = 3;  ///< deg, heading at the goal ([Conceicao16]: 0.05 rad)
   /** The keys of [navigation] only (the general ones). */
