@@ -110,6 +110,24 @@ bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip,
   return true;
 }
 
+bool GlobalPlanner::polylineClearOf(const GlobalPlanner& before, const std::vector<TPoint2D>& pts,
+                                    double skip, double radius) const {
+  if (pts.empty()) return true;
+  const TPoint2D s0 = pts.front();
+  for (size_t i = 0; i + 1 < pts.size(); ++i) {
+    const double len = std::hypot(pts[i + 1].x - pts[i].x, pts[i + 1].y - pts[i].y);
+    const int n = std::max(1, static_cast<int>(std::ceil(len / (res_ / 2))));
+    for (int k = 0; k <= n; ++k) {
+      const double x = pts[i].x + (pts[i + 1].x - pts[i].x) * k / n;
+      const double y = pts[i].y + (pts[i + 1].y - pts[i].y) * k / n;
+      if (std::hypot(x - s0.x, y - s0.y) < skip || !before.isFree(x, y)) continue;
+      const double need = std::min(radius, before.clearance(x, y) - 1e-6);
+      if (!isPassable(x, y, need)) return false;
+    }
+  }
+  return true;
+}
+
 namespace {
 
 using Cell = std::pair<int, int>;
@@ -462,6 +480,25 @@ std::vector<TPoint2D> routeAhead(const Route& route, const TPoint2D& from) {
   return ahead;
 }
 
+/** Whether `route` (none: blocked) is blocked on `marked` (`map` with what
+ *  was seen marked) for the robot at `from`. A footprint route is checked
+ *  with the footprint; a circle's with the circle at the clearance it
+ *  keeps, all of it (replan_new_only off), or ahead of the robot where the
+ *  marks leave less than the map did. */
+bool routeBlocked(const GlobalPlanner& marked, const mrpt::maps::COccupancyGridMap2D& map,
+                  const std::optional<Route>& route, const TPoint2D& from, double robot_radius,
+                  double skip, const NavigationParams& p, bool footprint_route) {
+  if (!route) return true;
+  std::vector<TPoint2D> ahead{from};
+  if (footprint_route || p.replan_new_only)
+    ahead = routeAhead(*route, from);
+  else
+    ahead.insert(ahead.end(), route->waypoints.begin(), route->waypoints.end());
+  if (route->footprint) return !marked.footprintClear(ahead, skip);
+  if (!p.replan_new_only) return !marked.polylineClear(ahead, skip, route->radius);
+  return !marked.polylineClearOf(GlobalPlanner(map, robot_radius, p), ahead, skip, route->radius);
+}
+
 }  // namespace
 
 std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map,
@@ -476,10 +513,10 @@ std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map
         q.y < marked.getYMax())
       marked.setPos(q.x, q.y, 0.0f);
   };
-  // With route_footprint: a hit on or beside what the map shows is that
-  // obstacle seen again: its mark would only grow it by a cell (a route
-  // through a gap the map leaves just room for would be blocked by its own
-  // posts); and only the route ahead of the robot is checked.
+  // With route_footprint or replan_new_only: a hit on or beside what the
+  // map shows is that obstacle seen again: its mark would only grow it by
+  // a cell (a route through a gap the map leaves just room for would be
+  // blocked by its own posts).
   const auto nx = static_cast<int>(map.getSizeX()), ny = static_cast<int>(map.getSizeY());
   auto mapped = [&](const TPoint2D& q) {
     const int ix = map.x2idx(q.x), iy = map.y2idx(q.y);
@@ -492,21 +529,15 @@ std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map
     return false;
   };
   const bool footprint_route = p.route_footprint && !footprint.empty();
+  const bool seen_again = footprint_route || p.replan_new_only;
   for (const auto& q : seen)
-    if (!footprint_route || !mapped(q)) mark(q);
+    if (!seen_again || !mapped(q)) mark(q);
   for (const auto& q : keep_out) mark(q);
   GlobalPlanner gp(marked, robot_radius, p);
   gp.setFootprint(footprint);
-  std::vector<TPoint2D> ahead{from};
-  if (route && footprint_route)
-    ahead = routeAhead(*route, from);
-  else if (route)
-    ahead.insert(ahead.end(), route->waypoints.begin(), route->waypoints.end());
-  // A route is checked as it was planned: with the footprint, or with the
-  // inscribed circle at the clearance it keeps.
-  const bool blocked = !route || (route->footprint ? !gp.footprintClear(ahead, skip)
-                                                   : !gp.polylineClear(ahead, skip, route->radius));
-  if (blocked && gp.isFree(from.x, from.y) && gp.isFree(goal.x, goal.y)) return gp.plan(from, goal);
+  if (routeBlocked(gp, map, route, from, robot_radius, skip, p, footprint_route) &&
+      gp.isFree(from.x, from.y) && gp.isFree(goal.x, goal.y))
+    return gp.plan(from, goal);
   return std::nullopt;
 }
 

@@ -48,6 +48,11 @@ const ParamTable<NavigationParams>& NavigationParams::table() {
           .integer("route_footprint_nodes", &P::route_footprint_nodes, "", 1000, 10000000,
                    "... expanding at most this many (cell, heading) states (bounds its time; "
                    "none found: the circle's route)")
+          .flag("replan_new_only", &P::replan_new_only,
+                "global route: replanning drops the route only for what the map does not "
+                "show, ahead of the robot (hits on or beside the map's obstacles are those "
+                "seen again; where the map leaves the route less than its clearance, that is "
+                "enough)")
           .real("goal_tolerance", &P::goal_tolerance, "m", 0.01, 10,
                 "goal reached within this distance ([Conceicao16]: 0.5)")
           .real("goal_tolerance_deg", &P::goal_tolerance_deg, "deg", 0.1, 180,

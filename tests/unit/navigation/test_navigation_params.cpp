@@ -76,8 +76,8 @@ TEST(NavigationParams, EveryKeyHasOneSectionAndTheOldOnesAreRenamed) {
   add(LocalMapParams::table().specs());
   add(PeopleParams::table().specs());
   add(SafetyParams::table().specs());
-  EXPECT_EQ(n, 52u);  // the 46 keys of the previous [navigation], static_memory, align_deg,
-                      // track_min_cells, route_footprint(_margin, _nodes)
+  EXPECT_EQ(n, 53u);  // the 46 keys of the previous [navigation], static_memory, align_deg,
+                      // track_min_cells, route_footprint(_margin, _nodes), replan_new_only
   EXPECT_EQ(keys.size(), n) << "a key in two sections";
   size_t renamed = 0;
   for (const auto& r : ProfileSchemas::instance().renames())

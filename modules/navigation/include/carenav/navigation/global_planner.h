@@ -68,6 +68,12 @@ class GlobalPlanner {
    *  (the first `skip` metres from its start excepted: the robot may stand
    *  closer to an obstacle than the route may pass); `radius` as isPassable. */
   bool polylineClear(const std::vector<TPoint2D>& pts, double skip = 0, double radius = -1) const;
+  /** polylineClear, but where `before` (this planner's map before new
+   *  obstacles were marked on it) already left less than `radius`, or
+   *  nothing, the clearance `before` left is enough: the polyline is
+   *  blocked only by what `before` did not hold. */
+  bool polylineClearOf(const GlobalPlanner& before, const std::vector<TPoint2D>& pts, double skip,
+                       double radius) const;
   /** True when the footprint can drive `pts` forward (each segment at its
    *  heading, turning on the spot at its vertices) keeping half of
    *  route_footprint_margin, the first and last `skip` metres excepted;
@@ -104,11 +110,13 @@ class GlobalPlanner {
 
 /** Replanning with what the robot has seen: marks `seen` obstacles and the
  *  `keep_out` points (map frame) on a copy of `map` (the robot's outline
- *  `footprint`, if given: GlobalPlanner::setFootprint; with route_footprint
- *  then, seen points on or beside the map's own obstacles are not marked
- *  and the route is checked from the robot's nearest point on it) and, when the route
- *  ahead of `from` is no longer clear of them (beyond `skip` metres), plans
- *  a new one from `from` to `goal`.
+ *  `footprint`, if given: GlobalPlanner::setFootprint) and, when the route
+ *  is no longer clear of them (beyond `skip` metres from `from`), plans a
+ *  new one from `from` to `goal`. With replan_new_only (or route_footprint
+ *  and a footprint), seen points on or beside the map's own obstacles are
+ *  not marked and only the route ahead of the robot's nearest point on it
+ *  is checked; with replan_new_only, where the map itself leaves a
+ *  circle's route less than its clearance, that clearance is enough.
  *  nullopt: keep the current route (still clear, or no new one found: a
  *  route that flips between two equal detours makes the robot dither). */
 std::optional<Route> replanAroundSeen(const mrpt::maps::COccupancyGridMap2D& map,

@@ -183,6 +183,17 @@ struct NavigationParams : DwaParams,
   bool route_footprint = false;
   double route_footprint_margin = 0.03;  ///< m
   int route_footprint_nodes = 60000;
+  /** Replanning drops the route only for what the map does not show,
+   *  ahead of the robot: lidar hits on or beside the map's own obstacle
+   *  cells are those obstacles seen again (a pose known to a few cm puts
+   *  them a cell off) and are not marked; the route is checked from the
+   *  robot's nearest point on it on; and where the map itself leaves the
+   *  route less than its clearance (the line through a tight gap), the
+   *  map's clearance is enough. Off: every replanning found the route
+   *  through a tight gap blocked by the map itself or by its own posts
+   *  seen again, and planned anew, the way flipping between near-equal
+   *  ones (docs/BENCHMARKS.md, clutter). */
+  bool replan_new_only = true;
   double goal_tolerance = 0.5;    ///< m, goal reached ([Conceicao16])
   double goal_tolerance_deg = 3;  ///< deg, heading at the goal ([Conceicao16]: 0.05 rad)
   /** The keys of [navigation] only (the general ones). */
