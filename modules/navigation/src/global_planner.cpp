@@ -93,39 +93,41 @@ bool GlobalPlanner::lineOfSight(int x0, int y0, int x1, int y1, double radius) c
   return true;
 }
 
-bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip,
-                                  double radius) const {
+namespace {
+
+/** Whether `ok(x, y)` holds at every point of the polyline `pts`, sampled
+ *  every `step` metres along each segment, but for those within `skip` of
+ *  its start. */
+template <typename Ok>
+bool everySample(const std::vector<TPoint2D>& pts, double skip, double step, Ok ok) {
   if (pts.empty()) return true;
   const TPoint2D s0 = pts.front();
   for (size_t i = 0; i + 1 < pts.size(); ++i) {
     const double len = std::hypot(pts[i + 1].x - pts[i].x, pts[i + 1].y - pts[i].y);
-    const int n = std::max(1, static_cast<int>(std::ceil(len / (res_ / 2))));
+    const int n = std::max(1, static_cast<int>(std::ceil(len / step)));
     for (int k = 0; k <= n; ++k) {
       const double x = pts[i].x + (pts[i + 1].x - pts[i].x) * k / n;
       const double y = pts[i].y + (pts[i + 1].y - pts[i].y) * k / n;
-      if (std::hypot(x - s0.x, y - s0.y) < skip) continue;
-      if (!isPassable(x, y, radius)) return false;
+      if (std::hypot(x - s0.x, y - s0.y) >= skip && !ok(x, y)) return false;
     }
   }
   return true;
 }
 
+}  // namespace
+
+bool GlobalPlanner::polylineClear(const std::vector<TPoint2D>& pts, double skip,
+                                  double radius) const {
+  return everySample(pts, skip, res_ / 2,
+                     [&](double x, double y) { return isPassable(x, y, radius); });
+}
+
 bool GlobalPlanner::polylineClearOf(const GlobalPlanner& before, const std::vector<TPoint2D>& pts,
                                     double skip, double radius) const {
-  if (pts.empty()) return true;
-  const TPoint2D s0 = pts.front();
-  for (size_t i = 0; i + 1 < pts.size(); ++i) {
-    const double len = std::hypot(pts[i + 1].x - pts[i].x, pts[i + 1].y - pts[i].y);
-    const int n = std::max(1, static_cast<int>(std::ceil(len / (res_ / 2))));
-    for (int k = 0; k <= n; ++k) {
-      const double x = pts[i].x + (pts[i + 1].x - pts[i].x) * k / n;
-      const double y = pts[i].y + (pts[i + 1].y - pts[i].y) * k / n;
-      if (std::hypot(x - s0.x, y - s0.y) < skip || !before.isFree(x, y)) continue;
-      const double need = std::min(radius, before.clearance(x, y) - 1e-6);
-      if (!isPassable(x, y, need)) return false;
-    }
-  }
-  return true;
+  return everySample(pts, skip, res_ / 2, [&](double x, double y) {
+    if (!before.isFree(x, y)) return true;  // the map's own obstacle: not new
+    return isPassable(x, y, std::min(radius, before.clearance(x, y) - 1e-6));
+  });
 }
 
 namespace {
