@@ -272,6 +272,60 @@ TEST(CliNavigate, GoalByPlaceName) {
 
 // The safety supervisor in closed loop: when the user's command stops
 // arriving the walker stops.
+// Success is judged at the end from the simulator's truth: a run is not
+// "goal reached" once the robot touched something or drove off the map.
+TEST(CliNavigate, TheFirstCollisionEndsTheRunUnlessToldToContinue) {
+  // Without tracking the walker meets the crossing person (60 s scenario).
+  const auto dir = scratch() / "nav_collision";
+  fs::remove_all(dir);
+  const std::vector<std::string> off = {"--set", "navigation.predict_horizon=0", "--out",
+                                        dir.string()};
+  const NavRun first = navigate("walker-person-crossing.yaml", off);
+  ASSERT_EQ(first.r.code, 0) << first.r.err;
+  EXPECT_FALSE(jsonTrue(first.json, "success")) << first.json;
+  EXPECT_EQ(jsonReal(first.json, "collisions"), 1.0) << first.json;
+  EXPECT_NE(first.json.find("\"outcome\": \"1 collision(s)\""), std::string::npos);
+  const double ended = jsonReal(first.json, "duration_s").value_or(0);
+  EXPECT_LT(ended, 50.0) << "the run goes on after the collision";
+  // The navlog's last cycle is the collision, flagged.
+  const auto rows = readCsv(dir / "walker-person-crossing" / "navlog.csv");
+  ASSERT_GT(rows.size(), 2u);
+  ASSERT_EQ(rows.front()[18], "collision");
+  EXPECT_EQ(rows.back()[18], "1");
+  EXPECT_EQ(rows[rows.size() - 2][18], "0");
+  std::vector<std::string> go_on = off;
+  go_on.push_back("--continue-after-collision");
+  const NavRun all = navigate("walker-person-crossing.yaml", go_on);
+  ASSERT_EQ(all.r.code, 0) << all.r.err;
+  EXPECT_FALSE(jsonTrue(all.json, "success"));
+  EXPECT_GE(jsonReal(all.json, "collisions").value_or(0), 1.0);
+  EXPECT_GT(jsonReal(all.json, "duration_s").value_or(0), ended + 20.0) << all.json;
+}
+
+TEST(CliNavigate, LeavingTheMapIsAFailure) {
+  // A 4 m x 4 m map without walls; the user pushes the walker on past its edge.
+  const auto dir = scratch() / "nav_off_map";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "open.pgm", std::ios::binary) << "P5\n80 80\n255\n"
+                                                    << std::string(80 * 80, '\xff');
+  std::ofstream(dir / "open.yaml")
+      << "format: 1\nmap: open.pgm\nresolution: 0.05\norigin: [0, 0]\n";
+  std::ofstream(dir / "s.yaml") << "format: 1\nworld: open.yaml\nprofile: " << kSrc
+                                << "/ini/isr-aiwalker.ini\nstart: [1, 2, 0]\n"
+                                   "intent_heading:\n  - [0, 0.3, 0]\nduration: 15\nend: true\n";
+  const RunResult r = carenav(
+      {"-q", "navigate", "--scenario", (dir / "s.yaml").string(), "--json", "--out", dir.string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(jsonTrue(r.out, "success")) << r.out;
+  EXPECT_TRUE(jsonTrue(r.out, "left_map")) << r.out;
+  EXPECT_NE(r.out.find("\"outcome\": \"left the map\""), std::string::npos) << r.out;
+  EXPECT_EQ(jsonReal(r.out, "collisions"), 0.0);
+  const auto rows = readCsv(dir / "s" / "navlog.csv");
+  ASSERT_GT(rows.size(), 2u);
+  EXPECT_GT(std::stod(rows.back()[1]), 4.0) << "the walker did drive off the map";
+}
+
 TEST(CliNavigate, WalkerStopsWhenTheUserStopsCommanding) {
   const auto dir = scratch() / "nav_stale";
   fs::remove_all(dir);
