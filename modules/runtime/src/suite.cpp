@@ -11,19 +11,42 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 namespace carenav::navigation {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+/** A carenav world file: a top-level `map:` key and no `world:` key in its
+ *  first 64 KiB (a scenario names its world with `world:`). */
+bool isWorldFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::string head(64 * 1024, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  std::istringstream lines(head);
+  bool map = false;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("world:", 0) == 0) return false;
+    if (line.rfind("map:", 0) == 0) map = true;
+  }
+  return map;
+}
+
+}  // namespace
+
 std::vector<std::string> suiteFiles(const std::string& dir) {
   if (!fs::is_directory(dir)) throw InputError(dir + ": not a folder");
   std::vector<std::string> files;
   for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().extension() == ".yaml" && e.path().string().find(".places.") == std::string::npos)
+    if (e.path().extension() == ".yaml" &&
+        e.path().string().find(".places.") == std::string::npos && !isWorldFile(e.path()))
       files.push_back(e.path().string());
   std::sort(files.begin(), files.end());
   if (files.empty()) throw InputError(dir + ": no *.yaml scenario in it");

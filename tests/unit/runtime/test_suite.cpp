@@ -3,8 +3,8 @@
 #include <carenav/common/json.h>
 #include <carenav/localization/localization_params.h>
 #include <carenav/navigation/navigation_params.h>
-#include <carenav/runtime/suite.h>
 #include <carenav/perception/perception_params.h>
+#include <carenav/runtime/suite.h>
 #include <carenav/sim/sim_params.h>
 #include <carenav/slam/slam_params.h>
 
@@ -124,16 +124,19 @@ TEST(RunMetricsJson, AValueOfTheWrongTypeIsBadInput) {
   EXPECT_THROW(nav::RunMetrics::fromJson(carenav::Json::array()), carenav::InputError);
 }
 
-TEST(Suite, FilesAreTheSortedScenariosWithoutPlacesFiles) {
+TEST(Suite, FilesAreTheSortedScenariosWithoutPlacesOrWorldFiles) {
   const fs::path d = fs::temp_directory_path() / ("carenav_suite_" + std::to_string(getpid()));
   fs::create_directories(d);
   for (const char* f : {"b.yaml", "a.yaml", "w.places.yaml", "notes.txt"}) std::ofstream(d / f);
+  // A world beside its scenarios is not one of them.
+  std::ofstream(d / "w.yaml") << "# carenav world\nformat: 1\nmap: w.png\nresolution: 0.05\n";
+  std::ofstream(d / "c.yaml") << "format: 1\nworld: w.yaml\nstart: [1, 1, 0]\nend: true\n";
   const auto files = nav::suiteFiles(d.string());
-  ASSERT_EQ(files.size(), 2u);
+  ASSERT_EQ(files.size(), 3u);
   EXPECT_EQ(fs::path(files[0]).filename(), "a.yaml");
   EXPECT_EQ(fs::path(files[1]).filename(), "b.yaml");
-  fs::remove(d / "a.yaml");
-  fs::remove(d / "b.yaml");
+  EXPECT_EQ(fs::path(files[2]).filename(), "c.yaml");
+  for (const char* f : {"a.yaml", "b.yaml", "c.yaml"}) fs::remove(d / f);
   EXPECT_THROW(nav::suiteFiles(d.string()), carenav::InputError);
   EXPECT_THROW(nav::suiteFiles((d / "w.places.yaml").string()), carenav::InputError);
   fs::remove_all(d);
