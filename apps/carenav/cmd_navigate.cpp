@@ -185,14 +185,17 @@ void addOptions(CLI::App* cmd, NavigateArgs& a) {
     plugin_help += " " + n + " (" + d + ");";
   plugin_help += " default: the scenario's, else the profile's [navigation] plugin";
   auto* sc = cmd->add_option("--scenario", a.scenario, "One scenario file (docs/navigate.md)");
-  auto* su = cmd->add_option("--suite", a.suite, "A folder: every *.yaml scenario in it");
+  auto* su = cmd->add_option("--suite", a.suite,
+                             "A folder: every *.yaml scenario in it (world files and *.places.yaml "
+                             "beside them are skipped)");
   sc->excludes(su);
   cmd->add_option("--profile", a.profile,
                   "Robot profile (default: the scenario's 'profile:'); its [robot], sensors, "
                   "[navigation], [localization] and [sim] sections");
   cmd->add_option("--plugin", a.plugins, plugin_help);
   cmd->add_option("--goal", a.goal,
-                  "Goal instead of the scenario's: x,y,deg, or a place or room of the places "
+                  "Goal instead of the scenario's: x,y,deg, x,y (any heading), or a place or room "
+                  "of the places "
                   "file (\"kitchen/table\", \"kitchen\": its default place, else its most "
                   "central free cell)");
   cmd->add_option("--set", a.sets, "Override a profile value: section.key=value (repeatable)");

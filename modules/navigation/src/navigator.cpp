@@ -171,8 +171,9 @@ void Navigator::addPerceivedFrame(const std::vector<TPoint2D>& free_cells,
 }
 
 void Navigator::setRoute(const std::vector<TPoint2D>& waypoints, const TPose2D& goal) {
-  const bool new_goal =
-      !goal_ || goal_->x != goal.x || goal_->y != goal.y || goal_->phi != goal.phi;
+  const bool same_heading =
+      goal_ && (goal_->phi == goal.phi || (std::isnan(goal_->phi) && std::isnan(goal.phi)));
+  const bool new_goal = !goal_ || goal_->x != goal.x || goal_->y != goal.y || !same_heading;
   route_ = waypoints;
   goal_ = goal;
   if (new_goal)
@@ -328,6 +329,7 @@ Navigator::Cycle Navigator::cycle(double now) {
   if (goal_) {
     for (const auto& w : route_) in.path.push_back(mapToOdom(w));
     in.goal = mapToOdom(*goal_);
+    if (std::isnan(goal_->phi)) in.goal->phi = pose.phi;  // kAnyHeading: as it stands
   }
   if (rotate_request_ && !planner_->needsUserIntent()) {
     c.plan = turnInPlace(in);

@@ -3,6 +3,7 @@
 #include <carenav/common/file.h>
 #include <carenav/common/text.h>
 #include <carenav/common/yaml.h>
+#include <carenav/navigation/local_planner.h>
 #include <carenav/runtime/scenario.h>
 
 #include <mrpt/core/bits_math.h>
@@ -21,11 +22,13 @@ namespace fs = std::filesystem;
 using yaml::Node;
 
 std::optional<TPose2D> parsePoseText(const std::string& text) {
-  double x, y, deg;
+  double x, y, deg = 0;
   char c1, c2, extra;
   std::istringstream in(text);
-  if ((in >> x >> c1 >> y >> c2 >> deg) && c1 == ',' && c2 == ',' && !(in >> extra) &&
-      std::isfinite(x) && std::isfinite(y) && std::isfinite(deg))
+  if (!(in >> x >> c1 >> y) || c1 != ',' || !std::isfinite(x) || !std::isfinite(y))
+    return std::nullopt;
+  if (!(in >> c2)) return TPose2D{x, y, kAnyHeading};  // "x,y": any heading
+  if (c2 == ',' && (in >> deg) && !(in >> extra) && std::isfinite(deg))
     return TPose2D{x, y, mrpt::DEG2RAD(deg)};
   return std::nullopt;
 }
@@ -68,13 +71,18 @@ struct Reader {
     const auto v = numbers(n, what + " [x, y, heading_deg]", 3);
     return {v[0], v[1], mrpt::DEG2RAD(v[2])};
   }
-  /** A goal: [x, y, heading_deg], or the name of a place or room. */
+  /** A goal: [x, y] (any heading), [x, y, heading_deg], or the name of a
+   *  place or room. */
   GoalRef goal(const Node& n, const std::string& what) const {
     GoalRef g;
-    if (n.kind == Node::Kind::Scalar && (n.quoted || !n.scalar.empty()))
+    if (n.kind == Node::Kind::Scalar && (n.quoted || !n.scalar.empty())) {
       g.name = text(n, what);
-    else
-      g.pose = pose(n, what);
+    } else if (n.kind == Node::Kind::Seq && n.seq.size() == 2) {
+      const auto v = numbers(n, what + " [x, y]", 2);
+      g.pose = TPose2D{v[0], v[1], kAnyHeading};
+    } else {
+      g.pose = pose(n, what + " [x, y] or");
+    }
     return g;
   }
 };

@@ -151,3 +151,34 @@ TEST(NothingInView, LocalisationFollowsOdometryAndTheRunSaysSo) {
   o.sets = {};  // the full range sees the walls: every scan is weighed
   EXPECT_EQ(runScenario(parseScenario(text, "g.yaml", "."), o).dead_reckoning_scans, 0u);
 }
+
+// `goal: [x, y]` and `--goal x,y`: any heading will do. The robot stops at
+// the goal as it stands instead of turning to a heading nobody asked for.
+TEST(GoalWithoutHeading, IsReadAndReachedWithoutTurningAtTheGoal) {
+  EXPECT_TRUE(std::isnan(parsePoseText("12,10")->phi));
+  EXPECT_NEAR(parsePoseText("12,10,90")->phi, M_PI / 2, 1e-12);
+  for (const char* bad : {"12,10,", "12;10", "12,10,90,1", "12", "12,nan"})
+    EXPECT_FALSE(parsePoseText(bad)) << bad;
+  auto text = [](const std::string& goal) {
+    return "format: 1\nworld: " + kSrc + "/maps/worlds/empty_room.yaml\nprofile: " + kSrc +
+           "/ini/interbot.ini\nstart: [10, 10, 0]\ngoal: " + goal + "\nduration: 40\nend: true\n";
+  };
+  const Scenario any = parseScenario(text("[10, 13]"), "g.yaml", ".");
+  ASSERT_TRUE(any.goal);
+  EXPECT_TRUE(std::isnan(any.goal->phi));
+  EXPECT_THROW(parseScenario(text("[13]"), "g.yaml", "."), carenav::InputError);
+  // The robot starts facing +x and arrives facing +y: as fast as a goal
+  // asking for +y, a turn faster than one asking for -y (or for +x, the
+  // heading a missing one used to become).
+  const RunMetrics m_any = runScenario(any, {});
+  auto run = [&](const char* goal) {
+    const RunMetrics m = runScenario(parseScenario(text(goal), "g.yaml", "."), {});
+    EXPECT_TRUE(m.success) << goal << ": " << m.outcome;
+    return m.duration_s;
+  };
+  EXPECT_TRUE(m_any.success) << m_any.outcome;
+  EXPECT_LT(m_any.final_goal_error_m, 0.5);
+  EXPECT_NEAR(m_any.duration_s, run("[10, 13, 90]"), 0.35);
+  EXPECT_LT(m_any.duration_s + 0.5, run("[10, 13, 0]")) << "no turn at the goal";
+  EXPECT_LT(m_any.duration_s + 1.0, run("[10, 13, 270]"));
+}

@@ -142,6 +142,11 @@ struct PlannerInput {
   std::optional<TPose2D> goal;  ///< final goal (goal navigation)
 };
 
+/** The heading of a goal that may be reached facing any way (`goal: [x, y]`,
+ *  `--goal x,y`). Navigator::setRoute takes it; the planners never see it:
+ *  their goal then has the robot's own heading, so none turns at the goal. */
+inline constexpr double kAnyHeading = std::numeric_limits<double>::quiet_NaN();
+
 /** What a plan came to: the navigator and the recovery behaviours read
  *  this, people read PlannerOutput::note. */
 enum class PlanStatus {

@@ -45,7 +45,7 @@ struct Scenario {
   std::string profile;  ///< robot profile (may be empty: --profile)
   std::string plugin;   ///< local planner (may be empty: the profile's)
   TPose2D start;
-  std::optional<TPose2D> goal;  ///< goal scenario (map frame)
+  std::optional<TPose2D> goal;  ///< goal scenario (map frame; phi kAnyHeading: any)
   std::string goal_name;        ///< "room/place", "room" or "place" of the places file
   std::string places;           ///< places file for goal_name (default: WORLD.places.yaml)
   /** Goals visited in turn, from the first again after the last, until
@@ -74,8 +74,9 @@ Scenario readScenario(const std::string& path);
 Scenario parseScenario(const std::string& text, const std::string& origin,
                        const std::string& base_dir);
 
-/** "x,y,deg" (metres, degrees) as a pose; nullopt for any other text (a
- *  goal given by place name, or a typo the caller reports). */
+/** "x,y,deg" (metres, degrees) as a pose, "x,y" as one with kAnyHeading;
+ *  nullopt for any other text (a goal given by place name, or a typo the
+ *  caller reports). */
 std::optional<TPose2D> parsePoseText(const std::string& text);
 
 /** runScenario's refusal of a plugin that does not fit the scenario (a
