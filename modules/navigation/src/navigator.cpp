@@ -262,10 +262,9 @@ Navigator::Cycle Navigator::cycle(double now) {
   Cycle c;
   if (last_cycle_ && now > *last_cycle_ && now - *last_cycle_ < 1.0) period_ = now - *last_cycle_;
   last_cycle_ = now;
-  // A goal robot's commands are judged from its dynamics, whatever its
-  // planner assumes; a walker's user-intent-dwa takes a command at once.
-  const bool dynamics = planner_->usesMotionState() || !planner_->needsUserIntent();
-  const TPose2D pose = dynamics ? poseAt(now) : odom_;
+  // Every command is judged from the robot's dynamics, whatever its planner
+  // assumes: the pose at the cycle's time, the velocity it still has.
+  const TPose2D pose = poseAt(now);
   cycle_pose_ = pose;
   memory_.prune(now, {pose.x, pose.y});
   // The perception grid's cells stand alone in theirs: joined to the
@@ -364,10 +363,11 @@ Navigator::Cycle Navigator::cycle(double now) {
   s.plan = c.plan;
   s.pose = pose;
   s.map = &map_;
-  // The supervisor judges a goal robot's command from the robot's state
-  // even when its planner does not (mrpt-ptg plans commands as taken at
-  // once: at 2 m/s it turned into posts it could no longer avoid).
-  s.motion = dynamics ? std::optional<MotionState>(motionState()) : in.motion;
+  // The supervisor judges every command from the robot's state even when
+  // its planner does not: mrpt-ptg and the walker's user-intent-dwa plan
+  // commands as taken at once, and at 2 m/s both turned into posts they
+  // could no longer avoid.
+  s.motion = motionState();
   c.decision = supervisor_.apply(s);
   last_cmd_ = c.decision.cmd;
   // Held: stopped, or slowed to a crawl (the planner and the supervisor
