@@ -58,7 +58,7 @@ navigation::SessionGoal placeGoal(const NavigateNodeOptions& o,
 std::optional<TPose2D> goalFromText(const NavigateNodeOptions& o,
                                     const mrpt::maps::COccupancyGridMap2D& grid) {
   if (o.goal.empty()) return std::nullopt;
-  if (auto g = navigation::parsePoseText(o.goal)) return g;
+  if (auto g = navigation::parseGoalText(o.goal)) return g;
   return placeGoal(o, grid, o.goal).pose;
 }
 

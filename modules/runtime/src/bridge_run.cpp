@@ -31,7 +31,7 @@ void setBridgeGoal(const BridgeOptions& o, NavigationSession& s,
     throw InputError("--goal: plugin " + plugin + " follows its user; use a goal plugin");
   if (!grid || !o.start)
     throw InputError("--goal with --bridge needs --map and --start (where the robot is on it)");
-  auto goal = parsePoseText(o.goal);
+  auto goal = parseGoalText(o.goal);
   if (!goal) {
     const places::Goal g =
         places::resolveGoal(places::readPlacesFile(places::placesPathForMap(o.map)), *grid, o.goal);

@@ -21,7 +21,7 @@ namespace carenav::navigation {
 namespace fs = std::filesystem;
 using yaml::Node;
 
-std::optional<TPose2D> parsePoseText(const std::string& text) {
+std::optional<TPose2D> parseGoalText(const std::string& text) {
   double x, y, deg = 0;
   char c1, c2, extra;
   std::istringstream in(text);
@@ -31,6 +31,12 @@ std::optional<TPose2D> parsePoseText(const std::string& text) {
   if (c2 == ',' && (in >> deg) && !(in >> extra) && std::isfinite(deg))
     return TPose2D{x, y, mrpt::DEG2RAD(deg)};
   return std::nullopt;
+}
+
+std::optional<TPose2D> parsePoseText(const std::string& text) {
+  const auto p = parseGoalText(text);
+  if (p && std::isnan(p->phi)) return std::nullopt;  // a pose needs its heading
+  return p;
 }
 
 std::optional<std::pair<double, double>> Scenario::userAt(double t, double yaw) const {

@@ -25,7 +25,7 @@ Scenario withGoalOverride(const Scenario& scenario, const RunOptions& o) {
   if (o.goal.empty()) return sc;
   if (!sc.intent.empty())
     throw InputError(sc.file + ": --goal given for a scenario that scripts a user (intent)");
-  sc.goal = parsePoseText(o.goal);
+  sc.goal = parseGoalText(o.goal);
   sc.goal_name = sc.goal ? "" : o.goal;
   sc.patrol.clear();
   return sc;

@@ -66,7 +66,10 @@ TEST(PatrolScenario, MalformedPatrolsNameTheLine) {
     }
   };
   refused(patrolText("  - [6, 3, 0]\n"), "2 to 1000 goals");
-  refused(patrolText("  - [6, 3]\n  - [3, 6, 0]\n"), "[x, y, heading_deg]");
+  refused(patrolText("  - [6]\n  - [3, 6, 0]\n"), "[x, y, heading_deg]");
+  // [x, y]: a goal any heading will do
+  const Scenario any = parseScenario(patrolText("  - [6, 3]\n  - [3, 6, 0]\n"), "p.yaml", ".");
+  EXPECT_TRUE(std::isnan(any.patrol.front().pose->phi));
   refused(patrolText("  - [6, 3, 0]\n  - [3, 6, 0]\n", "goal: [1, 1, 0]\n"), "not both");
   refused(patrolText("  - [6, 3, 0]\n  - [3, 6, 0]\n", "leg_timeout: -1\n"), "leg_timeout");
 }
@@ -155,10 +158,12 @@ TEST(NothingInView, LocalisationFollowsOdometryAndTheRunSaysSo) {
 // `goal: [x, y]` and `--goal x,y`: any heading will do. The robot stops at
 // the goal as it stands instead of turning to a heading nobody asked for.
 TEST(GoalWithoutHeading, IsReadAndReachedWithoutTurningAtTheGoal) {
-  EXPECT_TRUE(std::isnan(parsePoseText("12,10")->phi));
-  EXPECT_NEAR(parsePoseText("12,10,90")->phi, M_PI / 2, 1e-12);
+  EXPECT_TRUE(std::isnan(parseGoalText("12,10")->phi));
+  EXPECT_NEAR(parseGoalText("12,10,90")->phi, M_PI / 2, 1e-12);
   for (const char* bad : {"12,10,", "12;10", "12,10,90,1", "12", "12,nan"})
-    EXPECT_FALSE(parsePoseText(bad)) << bad;
+    EXPECT_FALSE(parseGoalText(bad)) << bad;
+  EXPECT_FALSE(parsePoseText("12,10")) << "a start needs its heading";
+  EXPECT_NEAR(parsePoseText("12,10,90")->phi, M_PI / 2, 1e-12);
   auto text = [](const std::string& goal) {
     return "format: 1\nworld: " + kSrc + "/maps/worlds/empty_room.yaml\nprofile: " + kSrc +
            "/ini/interbot.ini\nstart: [10, 10, 0]\ngoal: " + goal + "\nduration: 40\nend: true\n";

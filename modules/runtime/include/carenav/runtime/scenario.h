@@ -74,10 +74,13 @@ Scenario readScenario(const std::string& path);
 Scenario parseScenario(const std::string& text, const std::string& origin,
                        const std::string& base_dir);
 
-/** "x,y,deg" (metres, degrees) as a pose, "x,y" as one with kAnyHeading;
- *  nullopt for any other text (a goal given by place name, or a typo the
- *  caller reports). */
+/** "x,y,deg" (metres, degrees) as a pose; nullopt for any other text (a
+ *  typo the caller reports). */
 std::optional<TPose2D> parsePoseText(const std::string& text);
+
+/** A goal: "x,y,deg" as parsePoseText, or "x,y" (any heading: kAnyHeading);
+ *  nullopt for any other text (a goal given by place name, or a typo). */
+std::optional<TPose2D> parseGoalText(const std::string& text);
 
 /** runScenario's refusal of a plugin that does not fit the scenario (a
  *  plugin that drives to a goal on a scenario that scripts a user): alone it
