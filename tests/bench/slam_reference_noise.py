@@ -131,6 +131,26 @@ def rpe_pairs(ref):
     return out
 
 
+def revisit_pairs(ref, min_path=10.0, max_dist=1.5, max_turn=45.0, stride=1):
+    """(i, j): scan j revisits the place of scan i, at least `min_path` m of
+    reference path later, within `max_dist` m and `max_turn` deg (by the
+    reference); for each i the closest such j. Places revisited after a
+    long way test a trajectory's consistency beyond 2 m."""
+    x, y, t = ref
+    s = np.concatenate([[0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    out = []
+    for i in range(0, len(x), stride):
+        later = np.nonzero(s - s[i] >= min_path)[0]
+        if len(later) == 0:
+            break
+        d = np.hypot(x[later] - x[i], y[later] - y[i])
+        turn = np.degrees(np.abs(np.angle(np.exp(1j * (t[later] - t[i])))))
+        ok = (d <= max_dist) & (turn <= max_turn)
+        if ok.any():
+            out.append((i, int(later[ok][np.argmin(d[ok])])))
+    return out
+
+
 def hat(ref_icp, est_icp, ref_est):
     """Each one's own rms error from the three rms differences (signed: a
     negative square says the independence assumption fails)."""
@@ -144,6 +164,9 @@ def main():
     ap.add_argument("log", help="CARMEN log (FLASER messages)")
     ap.add_argument("ref", help="reference poses, TUM, one per FLASER scan")
     ap.add_argument("est", nargs="+", help="trajectories under test, TUM, one pose per scan")
+    ap.add_argument("--revisits", action="store_true",
+                    help="pairs that revisit a place at least 10 m of path later (within 1.5 m\n"
+                         "and 45 deg by the reference) instead of the RPE pairs")
     a = ap.parse_args()
     try:
         scans, ref = read_scans(a.log), read_tum(a.ref)
@@ -153,15 +176,19 @@ def main():
     n = min([len(scans), len(ref[0])] + [len(e[0]) for e in ests])
     if n != len(ref[0]) or any(len(e[0]) != n for e in ests):
         raise SystemExit(f"{a.ref}: every trajectory needs one pose per scan ({len(scans)} scans)")
+    pairs = revisit_pairs(ref) if a.revisits else rpe_pairs(ref)
     diffs = []  # per usable pair: the translation of ref and of each est minus icp's
-    for i, j in rpe_pairs(ref):
+    for i, j in pairs:
         tree = cKDTree(scans[i])
         icp = pair_icp(tree, scans[i], scans[j], relative(ref, i, j))
         if icp is None or icp[3] < MIN_PAIRED:
             continue
         diffs.append([np.subtract(relative(t, i, j)[:2], icp[:2]) for t in [ref] + ests])
     d = np.array(diffs)
-    print(f"{a.log}: {len(rpe_pairs(ref))} RPE pairs, {len(d)} with a pairwise ICP")
+    kind = "revisit" if a.revisits else "RPE"
+    print(f"{a.log}: {len(pairs)} {kind} pairs, {len(d)} with a pairwise ICP")
+    if len(d) == 0:
+        return
     print("| trajectory | pairs | d(ref, icp) | d(est, icp) | d(ref, est) | s_ref | s_est | s_icp |")
     print("|---|---|---|---|---|---|---|---|")
     for k, name in enumerate(a.est, start=1):
