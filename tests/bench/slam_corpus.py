@@ -19,6 +19,7 @@ on a loaded machine; ratios are carenav / MRPT on the same input.
   tests/bench/slam_corpus.py --carenav build/apps/carenav/carenav --out /tmp/corpus \
       [--logs intel,csail] [--inputs laser,odo1,odo2,odo3] [--jobs 2] [--mrpt] \
       [--localize [--mrpt-loc]] [--reuse] [--set section.key=value ...] [--decimate N]
+      [--reference-noise]
 """
 import argparse
 import concurrent.futures as cf
@@ -348,16 +349,18 @@ def fmt(v, d=3):
     return str(v)
 
 
-def slam_table(rows):
+def slam_table(rows, split=False):
     out = ["| log | input | scans | ATE (m) | ATE max (m) | RPE 2 m rmse (m) | RPE 2 m mean (m) |"
+           + (" s_ref 2 m (m) | s_est 2 m (m) |" if split else "") +
            " closures | CPU (s) | MRPT icp-slam ATE (m) | MRPT CPU (s) | CPU ratio |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+           "|---|---|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if split else "")]
     for r in rows:
         ratio = (r["cpu_s"] / r["mrpt_cpu_s"]) if r.get("mrpt_cpu_s") else None
         ex = "" if r["exit"] == 0 else f" (exit {r['exit']})"
         mex = "" if r.get("mrpt_exit", 0) == 0 else f" (exit {r['mrpt_exit']})"
         out.append(f"| {r['log']} | {r['input']}{ex} | {fmt(r.get('scans'))} | {fmt(r.get('ate_m'))}"
                    f" | {fmt(r.get('ate_max_m'))} | {fmt(r.get('rpe2_m'))} | {fmt(r.get('rpe2_mean_m'))}"
+                   + (f" | {fmt(r.get('s_ref_m'))} | {fmt(r.get('s_est_m'))}" if split else "") +
                    f" | {fmt(r.get('closures'))}"
                    f" | {fmt(r['cpu_s'], 1)} | {fmt(r.get('mrpt_ate_m'))}{mex}"
                    f" | {fmt(r.get('mrpt_cpu_s'), 1)} | {fmt(ratio, 2)} |")
@@ -381,6 +384,33 @@ def loc_table(rows):
                    f" | {fmt(r.get('losses'))} | {fmt(r.get('injections'))} | {fmt(r.get('cpu_s'), 1)}"
                    f" | {mcpu} | {fmt(ratio, 2)} |")
     return "\n".join(out)
+
+
+def reference_noise(a, logs, work, results):
+    """--reference-noise: each slam row gets the reference's and its own
+    error per 2 m (the three-cornered hat of tests/bench/slam_reference_noise.py,
+    over the RPE pairs with a pairwise ICP)."""
+    try:
+        import slam_reference_noise as srn
+    except ImportError as e:
+        print(f"--reference-noise: {e} (it needs python3-numpy and python3-scipy)", file=sys.stderr)
+        return
+    for log in logs:
+        rows = [r for r in results if r["log"] == log and r["exit"] == 0]
+        if not rows:
+            continue
+        src = os.path.join(a.data, f"{log}-corrected.log.gz")
+        if a.decimate > 1:
+            src = os.path.join(work, "rawlog", f"{log}-every{a.decimate}.log.gz")
+        ref = os.path.join(work, "rawlog", f"{log}-{rows[0]['input']}.tum")
+        ests = [os.path.join(work, "slam", f"{log}-{r['input']}", "trajectory.tum") for r in rows]
+        try:
+            _, _, split = srn.split_errors(src, ref, ests)
+        except ValueError as e:
+            print(f"--reference-noise {log}: {e}", file=sys.stderr)
+            continue
+        for r, sp in zip(rows, split):
+            r["s_ref_m"], r["s_est_m"] = sp["own"][0], sp["own"][1]
 
 
 def write_index(work, logs, inputs, data):
@@ -422,6 +452,9 @@ def main():
     ap.add_argument("--reuse", action="store_true",
                     help="re-evaluate and tabulate the slam runs already in --out (no mapping)")
     ap.add_argument("--set", action="append", default=[], help="profile override (repeatable)")
+    ap.add_argument("--reference-noise", action="store_true",
+                    help="split each run's RPE into the reference's own error per 2 m and the\n"
+                         "run's (tests/bench/slam_reference_noise.py; needs numpy and scipy)")
     ap.add_argument("--decimate", type=int, default=1,
                     help="keep only every N-th scan of each log (the same run at 1/N of the "
                          "scan rate: a check that the front end holds at other rates)")
@@ -449,6 +482,8 @@ def main():
             results.append(r)
     order = {(l, i): n for n, (l, i) in enumerate((l, i) for l in logs for i in inputs)}
     results.sort(key=lambda r: order[(r["log"], r["input"])])
+    if a.reference_noise:
+        reference_noise(a, logs, work, results)
     loc = []
     if a.localize:
         odo = [i for i in inputs if i != "laser"]
@@ -466,7 +501,7 @@ def main():
         for r in results + loc:
             f.write(json.dumps(r) + "\n")
     write_index(work, logs, inputs, a.data)
-    print(slam_table(results))
+    print(slam_table(results, a.reference_noise))
     if loc:
         print()
         print(loc_table(loc))

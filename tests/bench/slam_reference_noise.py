@@ -159,6 +159,40 @@ def hat(ref_icp, est_icp, ref_est):
     return root((a + c - b) / 2), root((b + c - a) / 2), root((a + b - c) / 2)
 
 
+def split_errors(log, ref_path, est_paths, revisits=False):
+    """The three-cornered hat of every trajectory in `est_paths` against the
+    reference and the pairwise ICP. Returns (pairs, pairs with an ICP,
+    rows); a row per trajectory: pairs used, the three rms differences
+    (ref-icp, est-icp, ref-est) and the three own errors (s_ref, s_est,
+    s_icp), m. Raises ValueError for unreadable or mismatched files."""
+    try:
+        scans, ref = read_scans(log), read_tum(ref_path)
+        ests = [read_tum(p) for p in est_paths]
+    except (OSError, IndexError) as e:
+        raise ValueError(str(e)) from e
+    n = min([len(scans), len(ref[0])] + [len(e[0]) for e in ests])
+    if n != len(ref[0]) or any(len(e[0]) != n for e in ests):
+        raise ValueError(f"{ref_path}: every trajectory needs one pose per scan ({len(scans)} scans)")
+    pairs = revisit_pairs(ref) if revisits else rpe_pairs(ref)
+    diffs = []  # per usable pair: the translation of ref and of each est minus icp's
+    for i, j in pairs:
+        tree = cKDTree(scans[i])
+        icp = pair_icp(tree, scans[i], scans[j], relative(ref, i, j))
+        if icp is None or icp[3] < MIN_PAIRED:
+            continue
+        diffs.append([np.subtract(relative(t, i, j)[:2], icp[:2]) for t in [ref] + ests])
+    d = np.array(diffs)
+    rows = []
+    for k in range(1, len(est_paths) + 1 if len(d) else 1):
+        ri = (d[:, 0] ** 2).sum(-1)
+        ei = (d[:, k] ** 2).sum(-1)
+        re = ((d[:, 0] - d[:, k]) ** 2).sum(-1)
+        ok = (ri < MAX_DIFF ** 2) & (ei < MAX_DIFF ** 2) & (re < MAX_DIFF ** 2)
+        rms = [math.sqrt(v[ok].mean()) for v in (ri, ei, re)] if ok.any() else [math.nan] * 3
+        rows.append({"pairs": int(ok.sum()), "rms": rms, "own": list(hat(*rms))})
+    return len(pairs), len(d), rows
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("log", help="CARMEN log (FLASER messages)")
@@ -169,36 +203,17 @@ def main():
                          "and 45 deg by the reference) instead of the RPE pairs")
     a = ap.parse_args()
     try:
-        scans, ref = read_scans(a.log), read_tum(a.ref)
-        ests = [read_tum(p) for p in a.est]
-    except (OSError, ValueError, IndexError) as e:
+        n_pairs, n_icp, rows = split_errors(a.log, a.ref, a.est, a.revisits)
+    except ValueError as e:
         raise SystemExit(f"slam_reference_noise: {e}")
-    n = min([len(scans), len(ref[0])] + [len(e[0]) for e in ests])
-    if n != len(ref[0]) or any(len(e[0]) != n for e in ests):
-        raise SystemExit(f"{a.ref}: every trajectory needs one pose per scan ({len(scans)} scans)")
-    pairs = revisit_pairs(ref) if a.revisits else rpe_pairs(ref)
-    diffs = []  # per usable pair: the translation of ref and of each est minus icp's
-    for i, j in pairs:
-        tree = cKDTree(scans[i])
-        icp = pair_icp(tree, scans[i], scans[j], relative(ref, i, j))
-        if icp is None or icp[3] < MIN_PAIRED:
-            continue
-        diffs.append([np.subtract(relative(t, i, j)[:2], icp[:2]) for t in [ref] + ests])
-    d = np.array(diffs)
     kind = "revisit" if a.revisits else "RPE"
-    print(f"{a.log}: {len(pairs)} {kind} pairs, {len(d)} with a pairwise ICP")
-    if len(d) == 0:
+    print(f"{a.log}: {n_pairs} {kind} pairs, {n_icp} with a pairwise ICP")
+    if not rows:
         return
     print("| trajectory | pairs | d(ref, icp) | d(est, icp) | d(ref, est) | s_ref | s_est | s_icp |")
     print("|---|---|---|---|---|---|---|---|")
-    for k, name in enumerate(a.est, start=1):
-        ri = (d[:, 0] ** 2).sum(-1)
-        ei = (d[:, k] ** 2).sum(-1)
-        re = ((d[:, 0] - d[:, k]) ** 2).sum(-1)
-        ok = (ri < MAX_DIFF ** 2) & (ei < MAX_DIFF ** 2) & (re < MAX_DIFF ** 2)
-        rms = [math.sqrt(v[ok].mean()) for v in (ri, ei, re)]
-        s = hat(*rms)
-        print(f"| {name} | {ok.sum()} | " + " | ".join(f"{v:.3f}" for v in rms + list(s)) + " |")
+    for name, r in zip(a.est, rows):
+        print(f"| {name} | {r['pairs']} | " + " | ".join(f"{v:.3f}" for v in r["rms"] + r["own"]) + " |")
 
 
 if __name__ == "__main__":
