@@ -56,20 +56,24 @@ def old_laser_increment(n):
 
 
 def read_scans(log):
-    """The FLASER scans of a CARMEN log as points in the robot's frame."""
-    offset, scans = 0.0, []
+    """The FLASER scans of a CARMEN log as points in the robot's frame.
+    Readings under 5 cm are dropped, and so are those within 1 cm of the
+    log's largest reading: a scanner writes a beam that hit nothing as one
+    value at the top of its readings (50-82 m in the corpus logs)."""
+    offset, ranges = 0.0, []
     with gzip.open(log, "rt") if log.endswith(".gz") else open(log) as f:
         for line in f:
             w = line.split()
             if len(w) >= 3 and w[0] == "PARAM" and w[1] == "robot_frontlaser_offset":
                 offset = float(w[2])
-            if not w or w[0] != "FLASER":
-                continue
-            n = int(w[1])
-            r = np.array([float(v) for v in w[2:2 + n]])
-            a = -math.pi / 2 + old_laser_increment(n) * np.arange(n)
-            ok = (r > 0.05) & (r < 40)
-            scans.append(np.c_[offset + r[ok] * np.cos(a[ok]), r[ok] * np.sin(a[ok])])
+            if w and w[0] == "FLASER":
+                ranges.append(np.array([float(v) for v in w[2:2 + int(w[1])]]))
+    top = max((r.max() for r in ranges if len(r)), default=0.0)
+    scans = []
+    for r in ranges:
+        a = -math.pi / 2 + old_laser_increment(len(r)) * np.arange(len(r))
+        ok = (r > 0.05) & (r < top - 0.01)
+        scans.append(np.c_[offset + r[ok] * np.cos(a[ok]), r[ok] * np.sin(a[ok])])
     return scans
 
 
