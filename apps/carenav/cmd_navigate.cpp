@@ -194,10 +194,10 @@ void addOptions(CLI::App* cmd, NavigateArgs& a) {
                   "[navigation], [localization] and [sim] sections");
   cmd->add_option("--plugin", a.plugins, plugin_help);
   cmd->add_option("--goal", a.goal,
-                  "Goal instead of the scenario's: x,y,deg, x,y (any heading), or a place or room "
-                  "of the places "
-                  "file (\"kitchen/table\", \"kitchen\": its default place, else its most "
-                  "central free cell)");
+                  "Goal instead of the scenario's: x,y,deg, x,y (any heading), "
+                  "or a place or room of the places file "
+                  "(\"kitchen/table\", \"kitchen\": its default place, else its most central "
+                  "free cell)");
   cmd->add_option("--set", a.sets, "Override a profile value: section.key=value (repeatable)");
   cmd->add_option("--out", a.out,
                   "Output folder: one subfolder per run (run.png, navlog.csv, "
