@@ -113,9 +113,16 @@ bool fitWindow(const double w[Sums::kN], const SlopeTest& t, double& slope, doub
  *  ground voxels nearest the robot: those within kNearDepth of the nearest
  *  one (the floor the robot stands on, as far as the camera sees it), and the
  *  variance of that gradient (the sum over i and j, from the fit's
- *  residuals); false with fewer than kMinCells of them. */
-bool nearFloorGradient(const ElevationGrid& g, const std::vector<VoxelClass>& classes,
-                       uint32_t min_n, double& gi, double& gj, double& var) {
+ *  residuals); false with fewer than kMinCells of them, or when that plane
+ *  does not pass under the robot at z = 0 (within prior_height_tolerance
+ *  plus noise_k standard errors of its gradient times the distance): then
+ *  the nearest voxels are no floor the robot stands on (a ramp whose foot
+ *  hides the floor, its fit mixed with the little floor in view, leaned 2.3
+ *  deg and passed 9 cm below the robot; a level landing measured 6 deg
+ *  against it). */
+bool nearFloorGradient(const ElevationGrid& g, const PerceptionParams& p,
+                       const std::vector<VoxelClass>& classes, uint32_t min_n, double& gi,
+                       double& gj, double& var) {
   constexpr double kNearDepth = 0.75;  // m
   constexpr double kMinCells = 20;
   const int m = g.cells();
@@ -144,7 +151,10 @@ bool nearFloorGradient(const ElevationGrid& g, const std::vector<VoxelClass>& cl
   gj = (sii * sjz - sij * siz) / det;
   const double rss = std::max(0.0, (w[9] - w[6] * w[6] / n) - gi * siz - gj * sjz);
   var = rss / (n - 3) * (sii + sjj) / det;
-  return true;
+  const double c0 = 0.5 * (m - 1);  // the robot's cell (the grid's centre)
+  const double ai = w[1] / n - c0, aj = w[2] / n - c0;
+  const double z0 = w[6] / n - gi * ai - gj * aj;
+  return std::abs(z0) <= p.prior_height_tolerance + p.noise_k * std::sqrt(var) * std::hypot(ai, aj);
 }
 
 }  // namespace
@@ -160,7 +170,7 @@ SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const 
   const double r = g.resolution();
   const double tol = std::tan(std::sqrt(2.0) * p.prior_tilt_deg * M_PI / 180) * r;
   SlopeReference ref;
-  if (nearFloorGradient(g, classes, min_n, ref.gi, ref.gj, ref.var) &&
+  if (nearFloorGradient(g, p, classes, min_n, ref.gi, ref.gj, ref.var) &&
       std::hypot(ref.gi, ref.gj) <= tol)
     return ref;
   ref.var = 0;

@@ -451,3 +451,31 @@ TEST(FloorRegion, ARampWhoseFootHidesTheFloorIsNoFloor) {
   EXPECT_LT(occupiedSeen(sh.pipe->grid(), 2.8, 4.5, -1.5, 1.5), 0.02);
   EXPECT_LT(occupiedSeen(sh.pipe->grid(), 1.2, 2.7, -1.5, 1.5), 0.01);
 }
+
+TEST(RegionBorders, AOneCellHoleInARegionIsNoBorder) {
+  // Gentle ramps (4-7 deg) from 2.2-2.9 m to beyond the view, seen by a low
+  // camera (0.55-0.75 m, pitched 17-30 deg) under 2-3 times the profile's
+  // noise. Single voxels inside the ramp are not judged there (too few
+  // samples, or not flat within the level-floor noise); as borders each cut
+  // a disc of the fit's margin (about 1.2 m across at 3.5 m) out of the
+  // ramp's region, which then held too few cells to be judged and kept the
+  // false obstacles of rules 1-5: 26-41 % of the ramp occupied in 8 of these
+  // 12 cases. A one-cell hole is no border now: 2.6-6.6 % in 9 of them. The
+  // other 3 (28-41 %) stay unjudged: clusters of unjudged voxels (a ramp
+  // rising away scatters more than the level-floor noise the cells are
+  // judged flat with) are borders still (docs/perceive.md, "Known limits").
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(0, 1);
+  int below_10pct = 0;
+  for (int k = 0; k < 12; ++k) {
+    const double deg = 4 + 3 * u(rng), x0 = 2.2 + 0.7 * u(rng), h = 0.55 + 0.2 * u(rng),
+                 pitch = 17 + 13 * u(rng), noise = (2 + u(rng)) * kProfileNoise;
+    Scene s;
+    s.floor(-10, x0).ramp(x0, 10, (10 - x0) * std::tan(deg * kDeg));
+    const auto sh = perceive(s, camera(h, pitch), camera(h, pitch), noise, walker(), 100 + k);
+    const double occ = occupiedSeen(sh.pipe->grid(), x0 + 0.1, 4.5, -1.5, 1.5);
+    below_10pct += occ < 0.10;
+    RecordProperty("case" + std::to_string(k), std::to_string(occ));
+  }
+  EXPECT_GE(below_10pct, 9);
+}
