@@ -459,11 +459,10 @@ TEST(RegionBorders, AOneCellHoleInARegionIsNoBorder) {
   // samples, or not flat within the level-floor noise); as borders each cut
   // a disc of the fit's margin (about 1.2 m across at 3.5 m) out of the
   // ramp's region, which then held too few cells to be judged and kept the
-  // false obstacles of rules 1-5: 26-41 % of the ramp occupied in 8 of these
-  // 12 cases. A one-cell hole is no border now: 2.6-6.6 % in 9 of them. The
-  // other 3 (28-41 %) stay unjudged: clusters of unjudged voxels (a ramp
-  // rising away scatters more than the level-floor noise the cells are
-  // judged flat with) are borders still (docs/perceive.md, "Known limits").
+  // false obstacles of rules 1-5: 13-30 % of the ramp occupied in 5 of these
+  // 12 cases, 4 of 12 below 10 %. A one-cell hole is no border now: those 5
+  // at most 0.6 %, 9 of 12 below 10 %. The other 3 (17-33 %) are unchanged
+  // (docs/BENCHMARKS.md, "one-cell holes in a ramp's region").
   std::mt19937 rng(17);
   std::uniform_real_distribution<double> u(0, 1);
   int below_10pct = 0;
