@@ -162,7 +162,8 @@ bool nearFloorGradient(const ElevationGrid& g, const PerceptionParams& p,
 SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
                               const std::vector<VoxelClass>& classes, uint32_t min_n) {
   // Slopes are measured against the floor the robot stands on: the ground
-  // voxels nearest to it, else the plane, whichever is level within the
+  // voxels nearest to it (when their plane passes under the robot at z = 0:
+  // nearFloorGradient()), else the plane, whichever is level within the
   // mounting's tilt uncertainty first (pitch and roll each off by up to
   // prior_tilt_deg: sqrt(2) times that; it hides the calibration error); a
   // surface tilted more (a plane fitted to a ramp that fills the view) is no

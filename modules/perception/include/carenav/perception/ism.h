@@ -89,7 +89,8 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
  *  least-squares slope of the ground voxel means over the 7 x 7 cells around
  *  it (at least half of them judged: N_z >= d_min), measured against the
  *  floor the robot stands on (the plane of the ground voxels within 0.75 m
- *  of the nearest one, else `plane`, whichever is tilted less than sqrt(2)
+ *  of the nearest one when it passes under the robot at z = 0 within
+ *  prior_height_tolerance, else `plane`, whichever is tilted less than sqrt(2)
  *  prior_tilt_deg from the robot frame's level; else that level); steeper
  *  than max_slope_deg, and by more than noise_k standard errors of that
  *  slope, makes it an obstacle, whatever rules 1-3 and 5 said. Windows with
