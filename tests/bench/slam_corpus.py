@@ -30,6 +30,7 @@ import re
 import shutil
 import subprocess
 import sys
+import threading
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -128,14 +129,17 @@ def decimated(src, n, dest):
     if os.path.exists(dest):
         return dest
     k = 0
-    with gzip.open(src, "rt", errors="replace") as f, gzip.open(dest + ".part", "wt") as g:
+    # Two inputs of one log may get here at once (--jobs): each writes its own
+    # part, and the same content replaces the same name.
+    part = f"{dest}.{os.getpid()}.{threading.get_ident()}.part"
+    with gzip.open(src, "rt", errors="replace") as f, gzip.open(part, "wt") as g:
         for line in f:
             if line.startswith(LASER_MESSAGES):
                 k += 1
                 if (k - 1) % n:
                     continue
             g.write(line)
-    os.replace(dest + ".part", dest)
+    os.replace(part, dest)
     return dest
 
 
@@ -176,6 +180,7 @@ def slam_job(a, log, inp, work):
            "--method", a.method]
     for s in a.set:
         cmd += ["--set", s]
+    prev = []
     if a.reuse and os.path.exists(os.path.join(out, "summary.json")):
         old = [json.loads(l) for l in open(os.path.join(work, "results.jsonl"))]
         prev = [r for r in old if r["part"] == "slam" and r["log"] == log and r["input"] == inp]
@@ -201,7 +206,7 @@ def slam_job(a, log, inp, work):
         shutil.copy(os.path.join(out, "map.png"), os.path.join(work, "maps", f"{name}.png"))
     if a.mrpt and not a.reuse:
         r.update(mrpt_slam(a, rawlog, ref, os.path.join(work, "mrpt", name), est))
-    elif a.reuse:
+    elif a.reuse and prev:
         r.update({k: v for k, v in prev[0].items() if k in ("mrpt_exit", "mrpt_cpu_s")})
         if prev[0].get("mrpt_exit") == 0:
             r.update(mrpt_eval(a, ref, os.path.join(work, "mrpt", name)))
