@@ -563,14 +563,20 @@ class GraphMapper : public Mapper {
       if ((refined.pose - rel).norm() < 0.2 && refined.inliers >= 0.3) rel = refined.pose;
       if ((rel - guess).norm() > std::max(s.loop_max_correction, radius)) continue;
       // ICP's goodness counts the scan's points that found a partner; a
-      // keyframe seen again from another heading shares only part of its view
-      // with the old one, so a right match can score 0.6 (the simulated SENA
-      // loop). Below loop_min_goodness the visibility checks decide instead.
+      // keyframe seen again from another heading shares only part of its
+      // view with the old one, so a right match can score 0.6 (the simulated
+      // SENA loop), and pins the pose less well than ICP's covariance says.
       const bool icp_sure = info.goodness >= s.loop_min_goodness;
-      if (!icp_sure && !seenAlike(k, j, from, j + kLoopNeighbours, rel)) continue;
       mrpt::math::CMatrixDouble33 cov;
       pdf->getCovariance(cov);
       if (maxStdXY(cov) > 0.1) continue;  // slides along a corridor: no fix
+      // Every closure must pass the visibility checks, whatever its ICP
+      // goodness: a match along a corridor pairs nearly every point (goodness
+      // 0.9 and more) and ICP's covariance can claim a few cm along it, yet it
+      // fixes nothing there. Seen through a short-range scanner (10 m) such
+      // closures locked a drifted estimate in and bent the CSAIL map by
+      // metres; the distinctness check of seenAlike() tells them apart.
+      if (!seenAlike(k, j, from, j + kLoopNeighbours, rel)) continue;
       if (!icp_sure) {
         // A partial-overlap match pins the pose less well than its ICP
         // covariance claims: hundreds of such edges, each a few cm and a

@@ -42,9 +42,10 @@ const ParamTable<SlamParams>& SlamParams::table() {
           .integer("loop_min_separation", &SlamParams::loop_min_separation, "", 2, 100000,
                    "icp-graph: keyframes between a loop candidate and the current one")
           .real("loop_min_goodness", &SlamParams::loop_min_goodness, "", 0, 1,
-                "icp-graph: ICP quality that accepts a loop closure outright (below it, a "
-                "closure must pass the visibility checks loop_min_agreement, loop_min_overlap "
-                "and loop_min_distinct)")
+                "icp-graph: ICP quality from which a loop closure's edge takes ICP's "
+                "covariance as it is (below it, 5 cm and 1 deg are added: a partial overlap "
+                "pins the pose less well); every closure must pass the visibility checks "
+                "loop_min_agreement, loop_min_overlap and loop_min_distinct")
           .real("loop_min_agreement", &SlamParams::loop_min_agreement, "", 0, 1,
                 "icp-graph: smallest visibility agreement of a loop closure: of the points of "
                 "either scan that the other scan saw, the share lying where its beams ended "

@@ -32,7 +32,7 @@ struct SlamParams {
   double loop_search_radius = 4.0;   ///< m, keyframes this close are loop candidates (at least)
   double loop_search_max = 15.0;     ///< m, largest search radius the drift can ask for
   int loop_min_separation = 20;      ///< keyframes between a candidate and the current one
-  double loop_min_goodness = 0.8;    ///< [0,1] ICP quality to accept a loop closure outright
+  double loop_min_goodness = 0.8;    ///< [0,1] ICP quality trusted at its covariance
   double loop_min_agreement = 0.9;   ///< [0,1] visibility agreement of a partial-overlap closure
   double loop_min_overlap = 0.25;    ///< [0,1] share of both scans' points seen by the other
   double loop_min_distinct = 0.15;   ///< [0,1] overlap lost when the match moves 0.3 m
