@@ -565,7 +565,7 @@ class GraphMapper : public Mapper {
       // ICP's goodness counts the scan's points that found a partner; a
       // keyframe seen again from another heading shares only part of its
       // view with the old one, so a right match can score 0.6 (the simulated
-      // SENA loop), and pins the pose less well than ICP's covariance says.
+      // SENA loop).
       const bool icp_sure = info.goodness >= s.loop_min_goodness;
       mrpt::math::CMatrixDouble33 cov;
       pdf->getCovariance(cov);
