@@ -5,6 +5,8 @@
 #include <carenav/slam/correlative_matcher.h>
 #include <carenav/slam/slam_job.h>
 
+#include "carmen_ate.h"
+
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 
@@ -166,31 +168,6 @@ TEST(CorrelativeMatcher, MatchesConsecutiveScansOfTheIntelLog) {
   EXPECT_GE(ok, n * 9 / 10) << ok << " of " << n;
 }
 
-namespace {
-/** ATE (m, by index) of `carenav slam` (icp-graph) on a CARMEN log of the
- *  test data imported laser only, with `slam` as the [slam] parameters. */
-double laserOnlyAte(const std::string& name, const slam::SlamParams& params) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("carenav_cm_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  importLaserOnly(name, dir);
-  slam::SlamJobOptions o;
-  o.rawlog = (dir / (name + ".rawlog")).string();
-  o.out_dir = (dir / "map").string();
-  o.method = "icp-graph";
-  o.progress = false;
-  o.mapper.slam = params;
-  slam::runSlam(o);
-  io::AssociationParams by_index;
-  by_index.by_index = true;
-  const auto est = io::readTum((dir / "map" / "trajectory.tum").string());
-  const auto ref = io::readTum((dir / (name + ".tum")).string());
-  const double ate = io::computeAte(io::associate(est, ref, by_index)).translation.rmse;
-  std::filesystem::remove_all(dir);
-  return ate;
-}
-}  // namespace
-
 TEST(CorrelativeMatcher, LaserOnlyFrontEndHoldsInTheAcapulcoHall) {
   // The laser-only front end on a real log whose hall and corridors fix
   // little along the way (metre-long steps between scans, pillars and doors
@@ -198,7 +175,7 @@ TEST(CorrelativeMatcher, LaserOnlyFrontEndHoldsInTheAcapulcoHall) {
   // score, look-alikes a step behind won in some steps and the map ended
   // 2.30 m ATE from the reference; with the prior in the scan's
   // log-likelihood units 0.25 m.
-  EXPECT_LT(laserOnlyAte("acapulco", slam::SlamParams{}), 0.5);
+  EXPECT_LT(slam::test::carmenAte("acapulco", std::nullopt, slam::SlamParams{}), 0.5);
 }
 
 TEST(CorrelativeMatcher, TheMotionPriorKeepsTheCsailRobotOnItsWheels) {
@@ -209,6 +186,6 @@ TEST(CorrelativeMatcher, TheMotionPriorKeepsTheCsailRobotOnItsWheels) {
   slam::SlamParams flat;
   flat.laser_motion_along = flat.laser_motion_across = 10;
   flat.laser_motion_deg = 180;
-  EXPECT_LT(laserOnlyAte("csail", slam::SlamParams{}), 0.3);
-  EXPECT_GT(laserOnlyAte("csail", flat), 1.0);
+  EXPECT_LT(slam::test::carmenAte("csail", std::nullopt, slam::SlamParams{}), 0.3);
+  EXPECT_GT(slam::test::carmenAte("csail", std::nullopt, flat), 1.0);
 }
