@@ -33,12 +33,22 @@
 //   hazard_random [--profile ini/isr-aiwalker.ini] [--scenes 550] [--seed 1]
 //                 [--decimation 1] [--margin 0.2] [--set section.key=value]...
 //                 [--calib-error 3] [--noise-max 3] [--roll 5] [--list-clear]
-//                 [--only TYPE] [--dump N] [--slope-bands]
+//                 [--only TYPE] [--dump N] [--slope-bands] [--approach STEP]
 // --slope-bands: then the false obstacles of the traversable ramps by true
 // slope (1 deg bands, 3-7 deg and 7-max_slope_deg), the cells pooled.
+// --approach STEP: a hazard the first frame leaves clear in the corridor is
+// seen again after every STEP m driven straight at it (one frame each, no
+// obstacle memory), until a frame blocks it, its nearest part enters the
+// camera's blind zone, or it lies within the walker's stopping reach (its
+// safe_distance plus the braking distance from v_max with the reaction time
+// of the navigation session's "unknown floor ahead": command latency, one
+// control cycle, one frame). Reported per scene type: the distance from the
+// robot's front at which such hazards were first blocked, and those never
+// blocked in time (the walker would reach them on single frames).
 #include <carenav/common/profile.h>
 #include <carenav/common/robot.h>
 #include <carenav/perception/pipeline.h>
+#include <carenav/runtime/unknown_ahead.h>
 
 #include <mrpt/poses/CPose3D.h>
 
@@ -213,6 +223,7 @@ struct Gen {
 struct Camera {
   int width = 512, height = 424;
   double fov = 70.6, vfov = 60, range_min = 0.5, range_max = 4.5, noise_std = 0.005;
+  double rate_hz = 10;
 };
 
 /** Distance ahead of the robot of the near edge: in view of this mounting
@@ -287,9 +298,28 @@ bool separable(double c, double r, const Mount& m, const PerceptionParams& pp) {
   return std::abs(c) >= pp.noise_k * m.noise_factor * pp.depth_noise_std * r * m.h;
 }
 
+/** Whether the hazard of scene s (its edge at s.edge) is separable from
+ *  the floor by the noise model: curbs, steps up and thresholds by their
+ *  height, holes and gutters by how deep the ray dips into them (w tan(alpha)
+ *  = w h / r_h at their far wall); every other type always. */
+bool sceneInRange(const Scene& s, const Mount& m, const PerceptionParams& pp) {
+  const double ex = s.edge, r = std::hypot(ex - kCamX, m.h);
+  switch (s.type) {
+    case Type::CurbDown:
+    case Type::StepUp:
+    case Type::Threshold:
+      return separable(s.size, r, m, pp);
+    case Type::Hole:
+    case Type::Gutter:
+      return separable(std::min(s.depth, s.size * m.h / std::max(0.1, ex - kCamX)), r, m, pp);
+    default:
+      return true;
+  }
+}
+
 /** Fills the hazard of scene type t at edge distance ex. */
 void buildHazard(Scene& s, Gen& g, const Mount& m, const PerceptionParams& pp) {
-  const double ex = s.edge, r = std::hypot(ex - kCamX, m.h);
+  const double ex = s.edge;
   char buf[160] = "";
   switch (s.type) {
     case Type::Flat:
@@ -307,7 +337,6 @@ void buildHazard(Scene& s, Gen& g, const Mount& m, const PerceptionParams& pp) {
       s.angle = g.uni(-60, 60);
       s.size = g.uni(0.05, 0.20);
       addDrop(s, g, ex, s.angle * kDeg, 1, 10, s.size);
-      s.in_range = separable(s.size, r, m, pp);
       break;
     case Type::Hole:
     case Type::Gutter: {
@@ -320,16 +349,12 @@ void buildHazard(Scene& s, Gen& g, const Mount& m, const PerceptionParams& pp) {
       alongEdge(ex, th, s.size / 2, cx, cy);
       if (s.type == Type::Hole) cy += g.uni(-0.15, 0.15);
       addPit(s, cx, cy, th, s.size, l, s.depth);
-      // The ray dips w tan(alpha) = w h / r_h into the pit (its far wall).
-      const double seen = std::min(s.depth, s.size * m.h / std::max(0.1, ex - kCamX));
-      s.in_range = separable(seen, r, m, pp);
       break;
     }
     case Type::StepUp:
       s.angle = g.uni(-45, 45);
       s.size = g.uni(0.02, 0.10);
       addDrop(s, g, ex, s.angle * kDeg, 1, 10, -s.size);
-      s.in_range = separable(s.size, r, m, pp);
       break;
     case Type::RampOk:
     case Type::RampSteep:
@@ -345,7 +370,6 @@ void buildHazard(Scene& s, Gen& g, const Mount& m, const PerceptionParams& pp) {
       alongEdge(ex, th, w / 2, cx, cy);
       s.prisms.push_back(ground(0, 0, 0, 12, 12, 0, 0, false));
       s.prisms.push_back({cx, cy, th, w / 2, 12, s.size, 0, -0.01, true, false});
-      s.in_range = separable(s.size, r, m, pp);
       break;
     }
     case Type::Table:
@@ -358,6 +382,7 @@ void buildHazard(Scene& s, Gen& g, const Mount& m, const PerceptionParams& pp) {
       s.size = rad;
     }
   }
+  s.in_range = sceneInRange(s, m, pp);
   std::snprintf(buf, sizeof buf,
                 "edge %.2f m, size %.3f, depth %.3f, angle %.0f deg; camera %.2f m, pitch %.1f "
                 "(true %+.1f), roll %.1f (true %+.1f), noise x%.1f",
@@ -612,6 +637,10 @@ struct TypeTotals {
   size_t scenes = 0, in_range = 0, hazard = 0, hazard_occ = 0, trav = 0, trav_occ = 0;
   size_t blocked = 0, clear = 0, blocked_out = 0, clear_out = 0, over_1pct = 0;
   std::vector<std::string> clear_list;
+  std::vector<double> approach_blocked;  ///< --approach: m ahead of the front when blocked
+  std::vector<std::string> approach_late;
+  size_t approach_late_separable = 0;  ///< of approach_late, separable on a frame
+  size_t approach_skipped = 0;         ///< clear, but in the blind zone or the reach at once
 };
 
 void printTable(const std::vector<TypeTotals>& tt, bool list_clear) {
@@ -637,6 +666,34 @@ void printTable(const std::vector<TypeTotals>& tt, bool list_clear) {
   }
 }
 
+/** --approach: per scene type, the hazards the first frame left clear. */
+void printApproach(const std::vector<TypeTotals>& tt, double step, double reach) {
+  std::printf(
+      "Approach (--approach %g m; stopping reach %.2f m ahead of the front):\n\n"
+      "| scene type | clear on the first frame, in view beyond the reach (not: in the blind zone "
+      "or the reach) | blocked on approach | first blocked, m ahead of the front: min / median "
+      "| never blocked in time (separable on a frame / never) |\n|---|---|---|---|---|\n",
+      step, reach);
+  for (int t = 0; t < static_cast<int>(Type::kCount); ++t) {
+    auto d = tt[t].approach_blocked;
+    const size_t late = tt[t].approach_late.size();
+    if (d.empty() && late == 0 && tt[t].approach_skipped == 0) continue;
+    std::sort(d.begin(), d.end());
+    char r[48] = "-";
+    if (!d.empty()) std::snprintf(r, sizeof r, "%.2f / %.2f", d.front(), d[d.size() / 2]);
+    const size_t sep = tt[t].approach_late_separable;
+    std::printf("| %s | %zu (%zu) | %zu | %s | %zu / %zu |\n", typeName(static_cast<Type>(t)),
+                d.size() + late, tt[t].approach_skipped, d.size(), r, sep, late - sep);
+  }
+  std::printf("\n");
+  for (int t = 0; t < static_cast<int>(Type::kCount); ++t) {
+    const auto& l = tt[t].approach_late;
+    if (l.empty()) continue;
+    std::printf("Never blocked in time, %s (%zu):\n", typeName(static_cast<Type>(t)), l.size());
+    for (const auto& s : l) std::printf("  - %s\n", s.c_str());
+  }
+}
+
 /** Command line (see the head of the file). */
 struct Options {
   std::string profile_path = std::string(CARENAV_SOURCE_DIR) + "/ini/isr-aiwalker.ini";
@@ -646,7 +703,8 @@ struct Options {
   bool list_clear = false, slope_bands = false;
   std::string only;
   MountRanges ranges;
-  int dump = -1;  // scene whose grid is printed on stderr
+  int dump = -1;        // scene whose grid is printed on stderr
+  double approach = 0;  // m per approach frame (0: no approach)
   std::vector<std::string> sets;
 };
 
@@ -685,15 +743,19 @@ int parseArgs(int argc, char** argv, Options& o) {
       o.dump = std::stoi(val());
     else if (k == "--only")
       o.only = val();
+    else if (k == "--approach")
+      o.approach = std::stod(val());
     else {
       std::cerr << "usage: hazard_random [--profile P] [--scenes N] [--seed S] [--decimation D] "
                    "[--margin M] [--calib-error DEG] [--noise-max F] [--roll DEG] "
                    "[--set section.key=value]... [--list-clear] [--only TYPE] [--dump N] "
-                   "[--slope-bands]\n";
+                   "[--slope-bands] [--approach STEP]\n";
       return k == "--help" || k == "-h" ? 0 : 2;
     }
   }
   if (o.scenes < 1 || o.dec < 1) throw std::runtime_error("--scenes and --decimation must be >= 1");
+  if (o.approach < 0 || (o.approach > 0 && o.approach < 0.01))
+    throw std::runtime_error("--approach must be 0 (off) or at least 0.01 m");
   return -1;
 }
 
@@ -703,6 +765,7 @@ struct Setup {
   PerceptionParams pp;
   Camera cam;
   Corridor cor{0, 0, 3.0, 0.1};
+  double reach = 0;  ///< m ahead of the front: the walker cannot stop short of it
 };
 
 Setup loadSetup(const Options& o) {
@@ -715,7 +778,7 @@ Setup loadSetup(const Options& o) {
   bool found = false;
   for (const auto& s : loadSensors(prof))
     if (s.type == "depth-camera" && !found) {
-      su.cam = {s.width, s.height, s.fov, s.vfov, s.range_min, s.range_max, s.noise_std};
+      su.cam = {s.width, s.height, s.fov, s.vfov, s.range_min, s.range_max, s.noise_std, s.rate_hz};
       found = true;
     }
   if (!found) throw std::runtime_error(o.profile_path + ": no depth-camera sensor");
@@ -723,7 +786,19 @@ Setup loadSetup(const Options& o) {
     su.cor.half_width = std::max(su.cor.half_width, std::abs(p.y));
     su.cor.front = std::max(su.cor.front, p.x);
   }
+  navigation::UnknownAheadParams up;
+  up.command_latency = robot.command_latency;
+  up.frame_period = su.cam.rate_hz > 0 ? 1.0 / su.cam.rate_hz : up.frame_period;
+  up.margin = robot.safe_distance;
+  su.reach = navigation::UnknownAhead(robot, up, su.pp.resolution).reach(robot.v_max);
   return su;
+}
+
+/** The nearest floor the camera's lowest row sees (m ahead of the axle):
+ *  nearer lies the blind zone. */
+double nearView(const Mount& mt, const Camera& cam) {
+  const double true_low = (mt.pitch + mt.pitch_err + cam.vfov / 2) * kDeg;
+  return kCamX + (true_low < M_PI / 2 ? mt.h / std::tan(true_low) : 0.0);
 }
 
 /** Adds scene n's score to its type's totals. */
@@ -731,8 +806,7 @@ void addScore(int n, const Scene& sc, const Mount& mt, const Camera& cam, const 
               bool list_clear, TypeTotals& x) {
   // A hazard whose nearest part in the corridor lies in the camera's blind
   // zone (nearer than the floor the lowest row sees) is out of range too.
-  const double true_low = (mt.pitch + mt.pitch_err + cam.vfov / 2) * kDeg;
-  const double near_view = kCamX + (true_low < M_PI / 2 ? mt.h / std::tan(true_low) : 0.0);
+  const double near_view = nearView(mt, cam);
   const bool in_range = sc.in_range && !(s.has_hazard_in_corridor && s.first_hazard < near_view);
   ++x.scenes;
   x.in_range += in_range;
@@ -751,14 +825,10 @@ void addScore(int n, const Scene& sc, const Mount& mt, const Camera& cam, const 
   x.clear_list.push_back(std::string(b) + " -- " + sc.describe);
 }
 
-/** Scene n: generated, rendered, perceived and scored. */
-void runScene(int n, const Options& o, const Setup& su, std::vector<TypeTotals>& tt,
-              SlopeBands& bands) {
-  Gen g{std::mt19937_64(static_cast<uint64_t>(o.seed) * 1000003ULL + n)};
-  const Type type = static_cast<Type>(n % static_cast<int>(Type::kCount));
-  if (!o.only.empty() && o.only != typeName(type)) return;
-  const Mount mt = makeMount(g, o.ranges);
-  const Scene sc = makeScene(g, type, mt, su.cam, su.pp);
+/** Scene `sc` rendered from mounting `mt` (noise from `g`), perceived and
+ *  scored; its grid printed on stderr when `dump`. */
+SceneScore perceive(const Scene& sc, const Mount& mt, const Setup& su, const Options& o, Gen& g,
+                    double into, bool dump) {
   std::vector<Point3f> truth;
   const Cloud cloud = render(sc, mt, su.cam, o.dec, g, truth);
   Pipeline pipe(su.pp, Method::RrtGpd);
@@ -767,13 +837,79 @@ void runScene(int n, const Options& o, const Setup& su, std::vector<TypeTotals>&
   in.sensor_origin = {static_cast<float>(kCamX), 0.f, static_cast<float>(mt.h)};
   const FrameResult fr = pipe.process(in, false);
   const auto lab = labels(sc, pipe.grid(), o.margin);
-  if (n == o.dump) dumpScene(pipe, fr, lab, su.pp.occupied_threshold, su.pp.free_threshold);
+  if (dump) dumpScene(pipe, fr, lab, su.pp.occupied_threshold, su.pp.free_threshold);
+  return scoreScene(pipe.grid(), lab, truth, su.cor, into, su.pp.occupied_threshold);
+}
+
+/** The scene as seen after driving `dx` m straight ahead. */
+Scene shifted(Scene s, double dx) {
+  for (auto& p : s.prisms) p.cx -= dx;
+  for (auto& c : s.cyl) c.x -= dx;
+  s.edge -= dx;
+  return s;
+}
+
+/** --approach for scene n, left clear by its first frame: new frames after
+ *  every o.approach m driven at the hazard until one blocks it (true, with
+ *  `ahead` its distance from the robot's front) or it enters the blind zone
+ *  or the stopping reach unblocked (false; `separable`: the noise model
+ *  called it separable on one of the frames that left it clear). */
+bool approach(int n, const Options& o, const Setup& su, const Scene& sc, const Mount& mt,
+              double into, double& ahead, bool& separable) {
+  const double near_view = nearView(mt, su.cam);
+  separable = sc.in_range;
+  for (int k = 1;; ++k) {
+    Gen g{std::mt19937_64((static_cast<uint64_t>(o.seed) * 1000003ULL + n) * 7919ULL + k)};
+    const Scene at = shifted(sc, k * o.approach);
+    const SceneScore s = perceive(at, mt, su, o, g, into, false);
+    ahead = s.first_hazard - su.cor.front;
+    if (!s.has_hazard_in_corridor || ahead < su.reach) return false;
+    if (s.blocked) return true;
+    if (s.first_hazard < near_view) return false;
+    separable = separable || sceneInRange(at, mt, su.pp);
+  }
+}
+
+/** --approach for scene n if its first frame (score s) left the hazard
+ *  clear while in view and beyond the stopping reach (a hazard already in
+ *  the blind zone or the reach is not one the walker drives towards: the
+ *  navigation session's first frame and obstacle memory decide there). */
+void addApproach(int n, const Options& o, const Setup& su, const Scene& sc, const Mount& mt,
+                 double into, const SceneScore& s, TypeTotals& x) {
+  if (!s.has_hazard_in_corridor || s.blocked) return;
+  if (s.first_hazard < nearView(mt, su.cam) || s.first_hazard - su.cor.front < su.reach) {
+    ++x.approach_skipped;
+    return;
+  }
+  double ahead = 0;
+  bool separable = false;
+  if (approach(n, o, su, sc, mt, into, ahead, separable)) {
+    x.approach_blocked.push_back(ahead);
+    return;
+  }
+  char b[128];
+  std::snprintf(b, sizeof b, "scene %d%s: not blocked before %.2f m ahead of the front", n,
+                separable ? "" : " (never separable)", ahead);
+  x.approach_late.push_back(std::string(b) + " -- " + sc.describe);
+  x.approach_late_separable += separable;
+}
+
+/** Scene n: generated, rendered, perceived and scored. */
+void runScene(int n, const Options& o, const Setup& su, std::vector<TypeTotals>& tt,
+              SlopeBands& bands) {
+  Gen g{std::mt19937_64(static_cast<uint64_t>(o.seed) * 1000003ULL + n)};
+  const Type type = static_cast<Type>(n % static_cast<int>(Type::kCount));
+  if (!o.only.empty() && o.only != typeName(type)) return;
+  const Mount mt = makeMount(g, o.ranges);
+  const Scene sc = makeScene(g, type, mt, su.cam, su.pp);
   // A ramp is blocked up to 0.3 m past its foot (it rises there at most
   // 8 cm at 15 deg); every other hazard 0.1 m past its nearest cell.
   const double into = type == Type::RampSteep ? 0.3 : su.cor.into;
-  const SceneScore s = scoreScene(pipe.grid(), lab, truth, su.cor, into, su.pp.occupied_threshold);
-  addScore(n, sc, mt, su.cam, s, o.list_clear, tt[static_cast<size_t>(type)]);
+  const SceneScore s = perceive(sc, mt, su, o, g, into, n == o.dump);
+  TypeTotals& x = tt[static_cast<size_t>(type)];
+  addScore(n, sc, mt, su.cam, s, o.list_clear, x);
   if (type == Type::RampOk) addSlopeBand(sc, s, bands);
+  if (o.approach > 0) addApproach(n, o, su, sc, mt, into, s, x);
 }
 
 }  // namespace
@@ -788,6 +924,7 @@ int main(int argc, char** argv) try {
   for (int n = 0; n < o.scenes; ++n) runScene(n, o, su, tt, bands);
   printTable(tt, o.list_clear);
   if (o.slope_bands) printSlopeBands(bands, su.pp.max_slope_deg);
+  if (o.approach > 0) printApproach(tt, o.approach, su.reach);
   return 0;
 } catch (const std::exception& e) {
   std::cerr << "hazard_random: " << e.what() << "\n";
