@@ -274,6 +274,7 @@ IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const Percep
     rc = judgeSlopeRegions(g, p, *o, ref, thr, se, classes, decided);
     st.rescued_voxels += rc.rescued;
     st.steep_voxels += rc.steep;
+    st.step_voxels = rc.steps;
   }
   // Rule 4 measures slopes against the floor's plane rule 6 found (else its own reference).
   thread_local std::vector<VoxelClass> before_rule4;

@@ -275,7 +275,8 @@ void writeFrameCells(JsonWriter& j, const FrameResult& r) {
   j.key("voxels").beginObject().key("total").value(static_cast<uint64_t>(r.ism.voxels));
   j.key("ground").value(static_cast<uint64_t>(r.ism.ground_voxels));
   j.key("obstacle").value(static_cast<uint64_t>(r.ism.obstacle_voxels));
-  j.key("rescued").value(static_cast<uint64_t>(r.ism.rescued_voxels)).endObject();
+  j.key("rescued").value(static_cast<uint64_t>(r.ism.rescued_voxels));
+  j.key("step").value(static_cast<uint64_t>(r.ism.step_voxels)).endObject();
   j.key("cells").beginObject().key("occupied").value(static_cast<uint64_t>(r.counts.occupied));
   j.key("free").value(static_cast<uint64_t>(r.counts.free));
   j.key("unknown").value(static_cast<uint64_t>(r.counts.unknown)).endObject();

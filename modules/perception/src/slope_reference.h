@@ -49,7 +49,7 @@ SlopeReference slopeReference(const ElevationGrid& g, const Plane& plane, const 
  *  steep ramp may have joined the floor's region). `thr` and
  *  `se`: per cell the rule-1 threshold and the standard error of the mean. */
 struct RegionCounts {
-  size_t steep = 0, rescued = 0;
+  size_t steep = 0, rescued = 0, steps = 0;
   bool floor = false;        ///< the floor's plane is a judged region's (else `ref`)
   SlopeReference floor_ref;  ///< that region's gradient (per cell) and its variance
 };

@@ -379,6 +379,7 @@ bool regionSteep(const RegionFit& a, const RegionFit& ref, const PerceptionParam
 struct Verdicts {
   std::vector<uint8_t> v;
   std::vector<PlaneFit> fit;
+  std::vector<double> se2;  ///< variance of the judged fit's gradient (RegionFit)
   std::vector<int32_t> seed;
   double at(const ElevationGrid& g, int32_t id, double i, double j) const {
     const int m = g.cells();
@@ -386,19 +387,14 @@ struct Verdicts {
   }
 };
 
-/** The gentle regions reached from `floor_id` through borders without a
- *  step: along the border of two regions (4-neighbour cell pairs) their
- *  planes, at the pairs' midpoints, differ on average by no more than one
- *  cell's rise at max_slope_deg plus noise_k sqrt(var) of the border cells
- *  (the growth band: how far a border may lie from a kink) (a ramp's foot
- *  or top: the planes meet at the border; a curb or a step: they differ by
- *  its height all along). */
-std::vector<uint8_t> reachedRegions(const ElevationGrid& g, const RegionCells& cs,
-                                    const Verdicts& vd, int32_t floor_id,
-                                    const PerceptionParams& p) {
-  std::vector<uint8_t> reach(vd.v.size(), 0);
-  if (floor_id < 0) return reach;
-  std::map<std::pair<int32_t, int32_t>, std::array<double, 3>> border;  // sum d, sum var, pairs
+/** Per pair of judged regions sharing a border (4-neighbour cell pairs):
+ *  the sum of their planes' height differences at the pairs' midpoints
+ *  (the higher id's minus the lower's), the sum of the border cells' var,
+ *  the number of pairs, and the sums of the midpoints' cell coordinates. */
+using Borders = std::map<std::pair<int32_t, int32_t>, std::array<double, 5>>;
+
+Borders regionBorders(const ElevationGrid& g, const RegionCells& cs, const Verdicts& vd) {
+  Borders border;
   const int m = g.cells();
   for (int i = 0; i < m; ++i)
     for (int j = 0; j < m; ++j) {
@@ -413,22 +409,102 @@ std::vector<uint8_t> reachedRegions(const ElevationGrid& g, const RegionCells& c
         const double d = vd.at(g, std::max(a, b), mi, mj) - vd.at(g, std::min(a, b), mi, mj);
         auto& e = border[{std::min(a, b), std::max(a, b)}];
         e[0] += d, e[1] += 0.5 * (cs.var[q] + cs.var[q2]), e[2] += 1;
+        e[3] += mi, e[4] += mj;
       }
     }
+  return border;
+}
+
+/** Whether two regions meet without a step along their border `e`: their
+ *  planes differ on average by no more than one cell's rise at
+ *  max_slope_deg plus noise_k sqrt(var) of the border cells (the growth
+ *  band: how far a border may lie from a kink) (a ramp's foot or top: the
+ *  planes meet at the border; a curb or a step: they differ by its height
+ *  all along). */
+bool meetWithoutStep(const std::array<double, 5>& e, const ElevationGrid& g,
+                     const PerceptionParams& p) {
   const double rise = std::tan(p.max_slope_deg * M_PI / 180) * g.resolution();
+  return std::abs(e[0] / e[2]) <= rise + p.noise_k * std::sqrt(e[1] / e[2]);
+}
+
+/** The gentle regions reached from `floor_id` through borders without a
+ *  step (meetWithoutStep). */
+std::vector<uint8_t> reachedRegions(const Borders& border, const Verdicts& vd, int32_t floor_id,
+                                    const ElevationGrid& g, const PerceptionParams& p) {
+  std::vector<uint8_t> reach(vd.v.size(), 0);
+  if (floor_id < 0) return reach;
   reach[floor_id] = 1;
   for (bool grew = true; grew;) {
     grew = false;
     for (const auto& [key, e] : border) {
       const int32_t a = key.first, b = key.second;
       if (reach[a] == reach[b] || vd.v[reach[a] ? b : a] != 1) continue;
-      const double mean = e[0] / e[2], se = std::sqrt(e[1] / e[2]);
-      if (std::abs(mean) > rise + p.noise_k * se) continue;
+      if (!meetWithoutStep(e, g, p)) continue;
       reach[a] = reach[b] = 1;
       grew = true;
     }
   }
   return reach;
+}
+
+/** A step along the border `e` of regions a and b: their planes differ
+ *  there by at least mean_step, and by more than meetWithoutStep allows with
+ *  the planes' own uncertainty at the border added to the cells' (each
+ *  gradient's standard error times the border's distance from the region's
+ *  seed, where its fit is anchored: a far region's plane, extrapolated to
+ *  its border with the floor, is off by that). */
+bool isStep(const std::array<double, 5>& e, const ElevationGrid& g, const PerceptionParams& p,
+            const Verdicts& vd, int32_t a, int32_t b) {
+  const int m = g.cells();
+  const double r = g.resolution(), mi = e[3] / e[2], mj = e[4] / e[2];
+  auto dist2 = [&](int32_t id) {
+    const double di = (mi - vd.seed[id] / m) * r, dj = (mj - vd.seed[id] % m) * r;
+    return di * di + dj * dj;
+  };
+  const double fit_var = vd.se2[a] * dist2(a) + vd.se2[b] * dist2(b);
+  const double diff = std::abs(e[0] / e[2]);
+  const double rise = std::tan(p.max_slope_deg * M_PI / 180) * r;
+  return diff >= p.mean_step && diff > rise + p.noise_k * std::sqrt(e[1] / e[2] + fit_var);
+}
+
+/** Steps between levels: a gentle region not reached that borders a
+ *  reached one with a step (isStep: at least mean_step, the height rule 2
+ *  calls an obstacle, and beyond the noise), their planes parallel within noise_k
+ *  standard errors of their gradients (two levels; a ramp's foot where the
+ *  border lies off the kink differs by the ramp's slope), is a level the
+ *  walker cannot drive onto from there (a step up, the street past a curb).
+ *  Rules 1 and 2 judge heights against the ground plane, which may lie
+ *  between the two levels (a 2.3 cm step: the plane 1.1 cm up, both levels
+ *  within mean_step of it): the region's ground voxels along that border
+ *  become obstacles, the step's line. Returns how many. */
+size_t markStepBorders(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
+                       const Verdicts& vd, const Borders& border, const std::vector<uint8_t>& reach,
+                       std::vector<VoxelClass>& classes) {
+  std::vector<uint8_t> level(vd.v.size(), 0);  // 1: a region past a step from a reached one
+  for (const auto& [key, e] : border) {
+    const int32_t a = key.first, b = key.second;
+    if (reach[a] == reach[b] || vd.v[reach[a] ? b : a] != 1) continue;
+    const bool parallel = slopeAgainst(vd.fit[a].gx, vd.fit[a].gy, vd.fit[b].gx, vd.fit[b].gy) <=
+                          p.noise_k * std::sqrt(vd.se2[a] + vd.se2[b]);
+    if (parallel && isStep(e, g, p, vd, a, b)) level[reach[a] ? b : a] = 1;
+  }
+  const int m = g.cells();
+  size_t marked = 0;
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      const int32_t q = i * m + j, l = cs.label[q];
+      if (l < 0 || !level[l] || classes[q] != VoxelClass::Ground) continue;
+      const int nbs[4][2] = {{i + 1, j}, {i - 1, j}, {i, j + 1}, {i, j - 1}};
+      for (const auto& nb : nbs) {
+        if (!g.inside(nb[0], nb[1])) continue;
+        const int32_t l2 = cs.label[nb[0] * m + nb[1]];
+        if (l2 < 0 || !reach[l2]) continue;
+        classes[q] = VoxelClass::Obstacle;
+        ++marked;
+        break;
+      }
+    }
+  return marked;
 }
 
 /** Vertical noise (m) of the samples of voxel q about a surface with the
@@ -660,6 +736,7 @@ int32_t judgeAll(const ElevationGrid& g, const PerceptionParams& p, const Point3
   const size_t min_cells = static_cast<size_t>(p.region_min_cells);
   vd.v.assign(rg.seeds.size(), 0);
   vd.fit.assign(rg.seeds.size(), PlaneFit{});
+  vd.se2.assign(rg.seeds.size(), 0.0);
   vd.seed = rg.seeds;
   int32_t floor_id = -1;
   bool first = true;
@@ -671,6 +748,7 @@ int32_t judgeAll(const ElevationGrid& g, const PerceptionParams& p, const Point3
         !trimmedFit(g, cs, one, rg.seeds[id], p.region_trim_k, vd.fit[id], n) || n < min_cells)
       continue;
     const RegionFit a = regionFit(vd.fit[id], n);
+    vd.se2[id] = a.se2;
     if (first && std::hypot(a.f.gx, a.f.gy) <= tol &&
         underRobot(g, p, o, vd, static_cast<int32_t>(id), a))
       floor = a, floor_id = static_cast<int32_t>(id);
@@ -701,8 +779,10 @@ RegionCounts judgeSlopeRegions(const ElevationGrid& g, const PerceptionParams& p
     rc.floor = true;
     rc.floor_ref = {floor.f.gx * r, floor.f.gy * r, floor.se2 * r * r};
   }
-  const std::vector<uint8_t> reach = reachedRegions(g, cs, vd, floor_id, p);
+  const Borders border = regionBorders(g, cs, vd);
+  const std::vector<uint8_t> reach = reachedRegions(border, vd, floor_id, g, p);
   applyVerdicts(g, p, o, cs, vd, reach, thr, se, classes, decided, rc);
+  rc.steps = markStepBorders(g, p, cs, vd, border, reach, classes);
   extendBeyondRegions(g, p, o, cs, vd, reach, floor_id, {floor.f.gx, floor.f.gy}, thr, se, classes,
                       rc);
   return rc;

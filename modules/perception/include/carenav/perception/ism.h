@@ -47,6 +47,7 @@ struct IsmStats {
   size_t voxels = 0, obstacle_voxels = 0, ground_voxels = 0;
   size_t rescued_voxels = 0;  ///< off-plane voxels kept as ground by rule 3
   size_t steep_voxels = 0;    ///< ground voxels on slopes steeper than max_slope_deg (rule 4)
+  size_t step_voxels = 0;     ///< ground voxels on the line of a step between levels (rule 6)
 };
 IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
                         const Point3f* sensor_origin, std::vector<VoxelClass>& classes,
