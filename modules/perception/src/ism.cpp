@@ -275,6 +275,10 @@ IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const Percep
     st.rescued_voxels += rc.rescued;
     st.steep_voxels += rc.steep;
     st.step_voxels = rc.steps;
+    if (rc.floor) {
+      st.floor_slope_x_deg = std::atan(rc.floor_ref.gi / g.resolution()) * 180 / M_PI;
+      st.floor_slope_y_deg = std::atan(rc.floor_ref.gj / g.resolution()) * 180 / M_PI;
+    }
   }
   // Rule 4 measures slopes against the floor's plane rule 6 found (else its own reference).
   thread_local std::vector<VoxelClass> before_rule4;

@@ -261,6 +261,11 @@ void writeFrameGround(JsonWriter& j, const FrameResult& r, Method method) {
   j.key("plane_source").value(r.plane_source);
   if (r.plane) j.key("plane_tilt_deg").value(std::acos(std::min(1.0, r.plane->c)) * 180 / M_PI);
   j.key("plane_note").value(r.plane_note);
+  j.key("floor_region_slope_deg");
+  if (std::isnan(r.ism.floor_slope_x_deg))
+    j.null();
+  else
+    j.beginArray().value(r.ism.floor_slope_x_deg).value(r.ism.floor_slope_y_deg).endArray();
   if (method == Method::RrtGpd) {
     j.key("plane_prior_offset_m").value(r.ground.plane ? r.ground.prior_offset : 0.0);
     j.key("rrt_trees").value(r.ground.trees_grown);

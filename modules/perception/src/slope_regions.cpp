@@ -54,13 +54,34 @@ bool fitPlane(const PlaneSums& s, PlaneFit& f) {
 struct RegionCells {
   std::vector<float> z, var, blur;
   std::vector<int32_t> label, inner;
-  std::vector<uint8_t> far;  ///< judged but within noise_k depth sigmas of depth_max
+  std::vector<uint8_t> far;   ///< judged but within noise_k depth sigmas of depth_max
+  std::vector<uint8_t> edge;  ///< near the data's near edge (nearEdge(), judgedFit())
 };
 
 /** How far (cells) a kink of max_slope_deg stays within noise_k sqrt(var)
  *  of a region's plane past the region's border. */
 double kinkCells(const ElevationGrid& g, const PerceptionParams& p, double var) {
   return p.noise_k * std::sqrt(var) / std::tan(p.max_slope_deg * M_PI / 180) / g.resolution();
+}
+
+/** Whether cell (i, j), its centre `dh` m from the sensor's foot along
+ *  the ground (unit vector (ux, uy) towards it), lies within one cell plus
+ *  `sh` (region_trim_k depth sigmas, their horizontal part) of a cell
+ *  without a sample nearer the sensor: the near edge of the data (the
+ *  image's lower border, the far side of a shadow). A sample moves along
+ *  its ray by the depth noise; the cells at that edge lose the samples
+ *  moved nearer and receive none from nearer hits, so their means hold
+ *  mostly the samples moved up and nearer (a floor seen from 1.16 m with
+ *  2.5 times the noise: the first row 2 cm high), and a short floor's slope
+ *  fit, tilted by them, made a 6.7 deg ramp beyond it read 7.4 deg. */
+bool nearEdge(const ElevationGrid& g, int i, int j, double ux, double uy, double dh, double sh) {
+  const double r = g.resolution();
+  const double reach = std::min(dh, 1.5 * r + sh);
+  for (double s = 0.5 * r; s <= reach; s += 0.5 * r) {
+    const int a = g.cellOf(g.centre(i) + ux * s), b = g.cellOf(g.centre(j) + uy * s);
+    if ((a != i || b != j) && (!g.inside(a, b) || g.at(a, b).n == 0)) return true;
+  }
+  return false;
 }
 
 void prepareCells(const ElevationGrid& g, const PerceptionParams& p, const Point3f& o,
@@ -75,6 +96,7 @@ void prepareCells(const ElevationGrid& g, const PerceptionParams& p, const Point
   cs.blur.resize(mm);
   cs.label.assign(mm, -1);
   cs.far.assign(mm, 0);
+  cs.edge.assign(mm, 0);
   for (size_t k = 0; k < mm; ++k) {
     if (classes[k] == VoxelClass::None) continue;
     const int i = static_cast<int>(k / m), j = static_cast<int>(k % m);
@@ -92,6 +114,12 @@ void prepareCells(const ElevationGrid& g, const PerceptionParams& p, const Point
       cs.far[k] = 1;
       continue;
     }
+    // Near the data's near edge the means are high: judgedFit() may leave
+    // the cells within a cell plus region_trim_k depth sigmas (their
+    // horizontal part) of it out of a region's slope fit.
+    const double dh = std::hypot(dx, dy), sray = p.depth_noise_std * r * r;
+    cs.edge[k] =
+        dh > 0 && nearEdge(g, i, j, -dx / dh, -dy / dh, dh, p.region_trim_k * sray * dh / r);
     cs.z[k] = static_cast<float>(c.mean);
     cs.var[k] = static_cast<float>(static_cast<double>(se[k]) * se[k] + tol2);
     // Margin a region's slope fit keeps from its border: a sample moves along
@@ -315,11 +343,12 @@ void innerDistance(const std::vector<VoxelClass>& classes, int m, RegionCells& c
 /** The slope fit of a region (its cells `members`, x and y from the seed)
  *  over its cells farther from its border than their blur (a kink at the
  *  border, a ramp's foot or landing, is smeared over that by the noise),
- *  refitted kTrimPasses times to the cells within trim_k standard errors of
- *  the previous fit, so that the cells taken past a kink do not bias it;
- *  `n` receives the cells of the last fit. */
+ *  with `skip_edge` not near the data's near edge (nearEdge()), refitted
+ *  kTrimPasses times to the cells within trim_k standard errors of the
+ *  previous fit, so that the cells taken past a kink do not bias it; `n`
+ *  receives the cells of the last fit. */
 bool trimmedFit(const ElevationGrid& g, const RegionCells& cs, const std::vector<int32_t>& members,
-                int32_t seed, double trim_k, PlaneFit& f, size_t& n) {
+                int32_t seed, double trim_k, bool skip_edge, PlaneFit& f, size_t& n) {
   constexpr int kTrimPasses = 3;
   const int m = g.cells(), si = seed / m, sj = seed % m;
   const double r = g.resolution();
@@ -328,7 +357,7 @@ bool trimmedFit(const ElevationGrid& g, const RegionCells& cs, const std::vector
     PlaneSums s;
     for (const int32_t q : members) {
       const double x = (q / m - si) * r, y = (q % m - sj) * r;
-      if (cs.inner[q] <= cs.blur[q]) continue;
+      if (cs.inner[q] <= cs.blur[q] || (skip_edge && cs.edge[q])) continue;
       const double dz = cs.z[q] - f.at(x, y);
       if (pass == 0 || dz * dz <= trim_k * trim_k * cs.var[q])
         s.add(1.0 / cs.var[q], x, y, cs.z[q]);
@@ -720,6 +749,38 @@ void judgeShortViews(const ElevationGrid& g, const PerceptionParams& p, const Re
   }
 }
 
+/** A region's trimmed fit (trimmedFit()) over at least region_min_cells,
+ *  without or with the cells near the data's near edge (nearEdge()):
+ *  without them when the two fits' gradients differ by more than
+ *  region_trim_k standard errors of that difference (nested fits: the root
+ *  of the difference of their gradient variances), their means biased (a
+ *  0.5 m floor strip seen from 1.16 m with 2.5x the noise: 0.7 deg apart,
+ *  4.5 of those); else with them (fewer cells, a larger standard error: a
+ *  6.1 deg ramp past a floor of 182 cells at decimation 4 read 5.5 +- 0.65
+ *  deg without them, steep). When only one holds region_min_cells, that one
+ *  (a floor of a few rows is a better floor than none: rule 4's reference,
+ *  a plane that may lean on the ramp beyond, made an 8.9 deg ramp 4.5 deg). */
+bool judgedFit(const ElevationGrid& g, const PerceptionParams& p, const RegionCells& cs,
+               const std::vector<int32_t>& members, int32_t seed, PlaneFit& f, size_t& n) {
+  const size_t min_cells = static_cast<size_t>(p.region_min_cells);
+  if (members.size() < min_cells) return false;
+  PlaneFit fa, fb;
+  size_t na = 0, nb = 0;
+  const bool a = trimmedFit(g, cs, members, seed, p.region_trim_k, true, fa, na) && na >= min_cells;
+  const bool b =
+      trimmedFit(g, cs, members, seed, p.region_trim_k, false, fb, nb) && nb >= min_cells;
+  if (!a && !b) return false;
+  bool skip = a;
+  if (a && b) {
+    const double d2 = (fa.gx - fb.gx) * (fa.gx - fb.gx) + (fa.gy - fb.gy) * (fa.gy - fb.gy);
+    const double v = regionFit(fa, na).se2 - regionFit(fb, nb).se2;
+    skip = d2 > p.region_trim_k * p.region_trim_k * std::max(0.0, v);
+  }
+  f = skip ? fa : fb;
+  n = skip ? na : nb;
+  return true;
+}
+
 /** The verdict on every region of at least region_min_cells (in its slope
  *  fit too); returns the floor's region (-1: none). The floor slopes are
  *  measured against: the first judged region (seeded nearest the robot)
@@ -733,7 +794,6 @@ int32_t judgeAll(const ElevationGrid& g, const PerceptionParams& p, const Point3
   const double r = g.resolution();
   const double tol = std::tan(std::sqrt(2.0) * p.prior_tilt_deg * M_PI / 180);
   floor = {{0, ref.gi / r, ref.gj / r, 0, 0}, ref.var / (r * r)};
-  const size_t min_cells = static_cast<size_t>(p.region_min_cells);
   vd.v.assign(rg.seeds.size(), 0);
   vd.fit.assign(rg.seeds.size(), PlaneFit{});
   vd.se2.assign(rg.seeds.size(), 0.0);
@@ -744,9 +804,7 @@ int32_t judgeAll(const ElevationGrid& g, const PerceptionParams& p, const Point3
   for (size_t id = 0; id < rg.seeds.size(); ++id) {
     one.assign(rg.members.begin() + rg.starts[id], rg.members.begin() + rg.starts[id + 1]);
     size_t n = 0;
-    if (one.size() < min_cells ||
-        !trimmedFit(g, cs, one, rg.seeds[id], p.region_trim_k, vd.fit[id], n) || n < min_cells)
-      continue;
+    if (!judgedFit(g, p, cs, one, rg.seeds[id], vd.fit[id], n)) continue;
     const RegionFit a = regionFit(vd.fit[id], n);
     vd.se2[id] = a.se2;
     if (first && std::hypot(a.f.gx, a.f.gy) <= tol &&

@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace carenav::perception {
@@ -48,6 +49,11 @@ struct IsmStats {
   size_t rescued_voxels = 0;  ///< off-plane voxels kept as ground by rule 3
   size_t steep_voxels = 0;    ///< ground voxels on slopes steeper than max_slope_deg (rule 4)
   size_t step_voxels = 0;     ///< ground voxels on the line of a step between levels (rule 6)
+  /// Rule 6: the slope (deg, up ahead / up to the left) of the floor's region,
+  /// the floor under the robot as seen (a mounting's pitch and roll error
+  /// show here); NaN when no region was the floor.
+  double floor_slope_x_deg = std::numeric_limits<double>::quiet_NaN();
+  double floor_slope_y_deg = std::numeric_limits<double>::quiet_NaN();
 };
 IsmStats classifyVoxels(const ElevationGrid& g, const Plane& plane, const PerceptionParams& p,
                         const Point3f* sensor_origin, std::vector<VoxelClass>& classes,
