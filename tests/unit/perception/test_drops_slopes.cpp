@@ -556,3 +556,26 @@ TEST(SlopeFits, TheNearEdgeOfTheDataDoesNotTiltAShortFloor) {
       }
   EXPECT_LT(std::abs(sum / frames), 0.1) << "mean floor slope ahead " << sum / frames << " deg";
 }
+
+TEST(BeyondRegions, AFarLandingSeenAtAGrazingAngleIsGround) {
+  // A 5.7 deg ramp from 0.9 m to 2.4 m and its landing (15 cm up), seen
+  // from a camera 0.5 m high pitched 24 deg (1.3 deg more than it is given)
+  // with 1.5x the profile's noise (hazard_random seed 73 scene 72): the
+  // landing 3.4-4.5 m ahead is seen at 5-8 deg, where many voxels hold one
+  // or two samples. Those stayed obstacles and stopped the search from the
+  // ramp's region over the landing, which kept its false obstacles behind
+  // them: 76-84 % of the landing occupied on these 4 frames. Judged by the
+  // same rules against the ramp's surface: 22-27 % (what keeps those
+  // occupied was not looked into).
+  double sum = 0;
+  int frames = 0;
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    Scene s;
+    s.floor(-10, 0.9).ramp(0.9, 2.4, 1.5 * std::tan(5.7 * kDeg));
+    const auto sh =
+        perceive(s, camera(0.5, 25.3), camera(0.5, 24), 1.5 * kProfileNoise, walker(), seed);
+    sum += occupiedSeen(sh.pipe->grid(), 3.4, 4.5, -1.0, 1.0);
+    ++frames;
+  }
+  EXPECT_LT(sum / frames, 0.4) << "landing occupied " << sum / frames;
+}
