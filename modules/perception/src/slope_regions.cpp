@@ -770,7 +770,10 @@ bool judgedFit(const ElevationGrid& g, const PerceptionParams& p, const RegionCe
   if (members.size() < min_cells) return false;
   PlaneFit fa, fb;
   size_t na = 0, nb = 0;
-  const bool a = trimmedFit(g, cs, members, seed, p.region_trim_k, true, fa, na) && na >= min_cells;
+  const bool any_edge =
+      std::any_of(members.begin(), members.end(), [&](int32_t q) { return cs.edge[q] != 0; });
+  const bool a = any_edge && trimmedFit(g, cs, members, seed, p.region_trim_k, true, fa, na) &&
+                 na >= min_cells;
   const bool b =
       trimmedFit(g, cs, members, seed, p.region_trim_k, false, fb, nb) && nb >= min_cells;
   if (!a && !b) return false;
