@@ -109,6 +109,12 @@ struct ColumnScan {
           static_cast<float>(o.z + t * (q.z - o.z))});
   }
   void step(Column& k, float& level, int8_t cls, double sd, size_t u, int v);
+  /** Two lower returns side by side in one row count as kLower in one
+   *  column: a column's first lower return after its floor, with a lower
+   *  return in a neighbouring column of the same row, marks the edge (a
+   *  small hole's far wall, seen over one row at a quarter of the
+   *  resolution, gives one lower return per column). */
+  void pairInRow(std::vector<Column>& cols, const std::vector<int8_t>& cls);
   void finish(Column& k, size_t u);
   const Point3f& at(int v, size_t u) const {
     return c.points[static_cast<size_t>(v) * c.width + u];
@@ -120,7 +126,7 @@ struct ColumnScan {
 // the plane, starting on the plane): a plane a degree off, or a gentle ramp,
 // moves it slowly; a drop or an obstacle jumps off it.
 constexpr int kGap = 4;          // invalid rows in a row: not the sensor's random dropout
-constexpr int kLower = 2;        // lower returns in a row: not one noisy sample
+constexpr int kLower = 2;        // lower returns in a row (or side by side): not one noisy sample
 constexpr float kFollow = 0.2f;  // weight of a new floor point in the level
 constexpr int kFirstLower = 4;   // a column's first returns lower than the floor: no floor seen
 
@@ -159,6 +165,19 @@ void ColumnScan::step(Column& k, float& level, int8_t cls, double sd, size_t u, 
   }
 }
 
+void ColumnScan::pairInRow(std::vector<Column>& cols, const std::vector<int8_t>& cls) {
+  const size_t w = cols.size();
+  for (size_t u = 0; u < w; ++u) {
+    Column& k = cols[u];
+    if (cls[u] != kLowerReturn || k.f_row < 0 || k.lower != 1) continue;
+    const bool left = u > 0 && cls[u - 1] == kLowerReturn;
+    const bool right = u + 1 < w && cls[u + 1] == kLowerReturn;
+    if (!left && !right) continue;
+    mark(at(k.f_row, u));
+    k.lower = kLower;
+  }
+}
+
 }  // namespace
 
 size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionParams& p,
@@ -185,6 +204,7 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
   for (size_t v = c.height; v-- > 0;) {
     classifyRow(c.points.data() + v * w, w, level.data(), rule, sd.data(), cls.data());
     for (size_t u = 0; u < w; ++u) s.step(cols[u], level[u], cls[u], sd[u], u, static_cast<int>(v));
+    s.pairInRow(cols, cls);
   }
   for (size_t u = 0; u < w; ++u) s.finish(cols[u], u);
   return s.edges;
