@@ -113,7 +113,12 @@ struct ColumnScan {
    *  column: a column's first lower return after its floor, with a lower
    *  return in a neighbouring column of the same row, marks the edge (a
    *  small hole's far wall, seen over one row at a quarter of the
-   *  resolution, gives one lower return per column). */
+   *  resolution, gives one lower return per column). Only with a noise
+   *  model (depth_noise_std > 0): then "lower" lies noise_k sigmas down
+   *  and two such returns are unlikely from noise; below a fixed d_pth the
+   *  far floor's noise crosses it (a simulated Kinect One without the
+   *  model: drop edges on a flat floor in 385 of 900 frames, 173 of 710
+   *  without the pairs). */
   void pairInRow(std::vector<Column>& cols, const std::vector<int8_t>& cls);
   void finish(Column& k, size_t u);
   const Point3f& at(int v, size_t u) const {
@@ -204,7 +209,7 @@ size_t markImageDropEdges(const Cloud& c, const Plane& plane, const PerceptionPa
   for (size_t v = c.height; v-- > 0;) {
     classifyRow(c.points.data() + v * w, w, level.data(), rule, sd.data(), cls.data());
     for (size_t u = 0; u < w; ++u) s.step(cols[u], level[u], cls[u], sd[u], u, static_cast<int>(v));
-    s.pairInRow(cols, cls);
+    if (p.depth_noise_std > 0) s.pairInRow(cols, cls);
   }
   for (size_t u = 0; u < w; ++u) s.finish(cols[u], u);
   return s.edges;
