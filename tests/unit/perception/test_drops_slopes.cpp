@@ -29,11 +29,14 @@ struct Shot {
 };
 
 /** One frame of `s` seen from `truth` with noise `noise` (std at 1 m, times
- *  depth^2), given to the pipeline as if the camera were at `given`. */
+ *  depth^2), given to the pipeline as if the camera were at `given`; W x H
+ *  pixels (the Kinect's 512 x 424, or a quarter of it per side: 128 x 106,
+ *  the simulator's depth_decimation 4). */
 Shot perceive(const Scene& s, const mrpt::poses::CPose3D& truth, const mrpt::poses::CPose3D& given,
-              double noise, const PerceptionParams& p = walker(), unsigned seed = 3) {
+              double noise, const PerceptionParams& p = walker(), unsigned seed = 3, int W = 512,
+              int H = 424) {
   Cloud optical;
-  renderDepth(s, truth, seed, 1.0, &optical, 512, 424, noise);
+  renderDepth(s, truth, seed, 1.0, &optical, W, H, noise);
   const Cloud c = toRobotFrame(optical, given, true);
   Shot sh;
   sh.pipe = std::make_unique<Pipeline>(p, Method::RrtGpd);
@@ -580,24 +583,6 @@ TEST(BeyondRegions, AFarLandingSeenAtAGrazingAngleIsGround) {
   EXPECT_LT(sum / frames, 0.4) << "landing occupied " << sum / frames;
 }
 
-namespace {
-/** One frame of `s` at a quarter of the Kinect's resolution (128 x 106, the
- *  profile's depth_decimation) from a camera h high pitched `pitch` deg,
- *  with `noise` times the profile's noise; the pipeline keeps the profile's. */
-Shot quarterFrame(const Scene& s, double h, double pitch, double noise, unsigned seed) {
-  Cloud optical;
-  renderDepth(s, camera(h, pitch), seed, 1.0, &optical, 128, 106, noise * kProfileNoise);
-  const Cloud c = toRobotFrame(optical, camera(h, pitch), true);
-  Shot sh;
-  sh.pipe = std::make_unique<Pipeline>(walker(), Method::RrtGpd);
-  FrameInput in;
-  in.cloud = &c;
-  in.sensor_origin = {0.2f, 0.f, static_cast<float>(h)};
-  sh.r = sh.pipe->process(in, false);
-  return sh;
-}
-}  // namespace
-
 TEST(DropEdges, ASmallGutterSeenOverOneRowOfAQuarterResolutionImageIsBlocked) {
   // Gutters 10-16 cm wide and 10-20 cm deep across the view, 1.6-2.2 m
   // ahead (separable by the noise model), seen at a quarter of the Kinect's
@@ -613,7 +598,8 @@ TEST(DropEdges, ASmallGutterSeenOverOneRowOfAQuarterResolutionImageIsBlocked) {
     const double h = 0.7 + 0.4 * U(rng), pitch = 20 + 15 * U(rng);
     Scene s;
     s.floor(-10, xe).floor(xe + w, 10).box({xe, xe + w, -10, 10, -2, -dz});
-    const Shot sh = quarterFrame(s, h, pitch, 1.0, 40 + k);
+    const Shot sh =
+        perceive(s, camera(h, pitch), camera(h, pitch), kProfileNoise, walker(), 40 + k, 128, 106);
     EXPECT_GE(sh.r.drop_edges, 16u) << "gutter " << k;  // of 128 columns
     EXPECT_LE(firstOccupiedAhead(sh.pipe->grid()), xe + 0.025) << "gutter " << k;
   }
@@ -628,7 +614,8 @@ TEST(DropEdges, AFlatFloorAtAQuarterResolutionHasNoDropEdge) {
     const double h = 0.7 + 0.4 * U(rng), pitch = 20 + 15 * U(rng), noise = 1 + 2 * U(rng);
     Scene s;
     s.floor(-10, 20);
-    const Shot sh = quarterFrame(s, h, pitch, noise, 60 + k);
+    const Shot sh = perceive(s, camera(h, pitch), camera(h, pitch), noise * kProfileNoise, walker(),
+                             60 + k, 128, 106);
     edges += sh.r.drop_edges;
     EXPECT_EQ(firstOccupiedAhead(sh.pipe->grid()), 99) << "floor " << k;
   }
